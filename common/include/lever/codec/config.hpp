@@ -1,0 +1,28 @@
+#pragma once
+// Parameters of the perceptual deadband codec (paper sections III-A to III-E).
+#include <cmath>
+#include <cstdint>
+
+namespace lever::codec {
+
+// Stable numbers: the mode travels in CAN command frames.
+enum class Mode : std::uint8_t {
+  deadband = 0,    // reference = last transmitted value (zero-order hold), eq. (2)/(3)
+  predictive = 1,  // reference = linear extrapolation of the last two transmitted values, section III-D
+};
+
+template <typename T>
+struct Config {
+  Mode mode = Mode::deadband;
+  T p = T(0.1);        // Weber fraction: relative deadband width
+  T floor = T(0);      // absolute deadband floor; 0 is the paper's rule
+  T filter_hz = T(0);  // prefilter cut-off; 0 switches the prefilter off
+};
+
+template <typename T>
+constexpr bool is_valid(const Config<T>& c) noexcept {
+  return (c.mode == Mode::deadband || c.mode == Mode::predictive) && std::isfinite(c.p) && c.p >= T(0) &&
+         std::isfinite(c.floor) && c.floor >= T(0) && std::isfinite(c.filter_hz) && c.filter_hz >= T(0);
+}
+
+}  // namespace lever::codec

@@ -1,0 +1,27 @@
+#pragma once
+// Example traces from simple physics, for the demo, the README's rate table and tests.
+#include <cstdint>
+#include <string>
+
+#include "trace_csv.hpp"
+
+namespace lever::tool {
+
+enum class TraceKind {
+  velocity,  // lever velocity by backward difference of a 16384-count encoder, operator tapping a stiff wall
+  force,     // the same lever's contact force through a noisy 16-bit strain gauge
+  force3,    // 3-DoF contact force of a cursor exploring a virtual sphere (paper eq. 11)
+};
+
+struct GeneratorOptions {
+  TraceKind kind = TraceKind::velocity;
+  std::uint64_t seed = 1;
+  double duration_s = 10.0;
+};
+
+Trace generate_trace(const GeneratorOptions& options);
+
+// CSV text of a trace, values in shortest round-trip form.
+std::string format_trace_csv(const Trace& trace);
+
+}  // namespace lever::tool
