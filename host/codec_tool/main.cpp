@@ -1,7 +1,7 @@
 // lever-codec: runs the perceptual deadband codec on a recorded trace, or generates example traces.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -84,9 +84,9 @@ int main(int argc, char** argv) {
     if (generate->parsed()) {
       const auto trace = lever::tool::generate_trace(gen);
       lever::tool::write_file_atomically(gen_out, lever::tool::format_trace_csv(trace));
-      fmt::print("{}\n", nlohmann::json{{"out", gen_out}, {"samples", trace.samples()}, {"dof", trace.dof},
-                                         {"seed", gen.seed}}
-                             .dump());
+      fmt::print("{}\n",
+                 nlohmann::json{{"out", gen_out}, {"samples", trace.samples()}, {"dof", trace.dof}, {"seed", gen.seed}}
+                     .dump());
       return 0;
     }
     if (input.empty() || output.empty()) return fail("--in and --out are required (see --help)");

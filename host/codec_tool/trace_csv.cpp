@@ -82,14 +82,13 @@ Trace read_trace(const std::filesystem::path& file) {
     }
     const auto cells = split_cells(line);
     if (cells.size() != columns.size())
-      throw TraceError(file, line_no,
-                       fmt::format("expected {} columns, found {}", columns.size(), cells.size()));
+      throw TraceError(file, line_no, fmt::format("expected {} columns, found {}", columns.size(), cells.size()));
     const double t = parse_cell(cells[0], file, line_no, "t");
     if (!trace.t.empty() && !(t > trace.t.back()))
-      throw TraceError(file, line_no,
-                       fmt::format("time {} does not increase (previous {})", cells[0], trace.t.back()));
+      throw TraceError(file, line_no, fmt::format("time {} does not increase (previous {})", cells[0], trace.t.back()));
     trace.t.push_back(t);
-    for (std::size_t c = 1; c < cells.size(); ++c) trace.values.push_back(parse_cell(cells[c], file, line_no, columns[c]));
+    for (std::size_t c = 1; c < cells.size(); ++c)
+      trace.values.push_back(parse_cell(cells[c], file, line_no, columns[c]));
   }
   if (in.bad()) throw TraceError(file, line_no, fmt::format("read error: {}", std::strerror(errno)));
   if (header.empty()) throw TraceError(file, 0, "empty file: expected header 't,x' or 't,x,y,z'");

@@ -21,9 +21,9 @@ class TraceError : public std::runtime_error {
 };
 
 struct Trace {
-  std::size_t dof = 1;        // 1 or 3
-  std::vector<double> t;      // seconds, strictly increasing
-  std::vector<double> values; // samples() * dof, row-major
+  std::size_t dof = 1;         // 1 or 3
+  std::vector<double> t;       // seconds, strictly increasing
+  std::vector<double> values;  // samples() * dof, row-major
 
   std::size_t samples() const noexcept { return t.size(); }
   const double* row(std::size_t i) const noexcept { return values.data() + i * dof; }

@@ -57,17 +57,17 @@ struct Segment1 {
 // The paper's 1-DoF rig: a lever (arm 0.1 m) that the operator pushes against a stiff wall at the TOP.
 // Values are a small desktop haptic lever; docs/codec.md says why.
 struct LeverWall {
-  static constexpr double inertia = 2.0e-3;         // kg m^2, lever plus the hand it carries
-  static constexpr double viscous = 0.02;           // N m s/rad
-  static constexpr double arm = 0.1;                // m, pivot to strain gauge / contact point
-  static constexpr double wall_angle = 0.35;        // rad
-  static constexpr double wall_stiffness = 200.0;   // N m/rad = 20 kN/m at the tip
-  static constexpr double wall_damping = 0.4;       // N m s/rad
-  static constexpr double hand_stiffness = 3.0;     // N m/rad = 300 N/m at the tip, a relaxed arm
-  static constexpr double hand_damping = 0.15;      // N m s/rad, near critical for the hand on the lever
+  static constexpr double inertia = 2.0e-3;        // kg m^2, lever plus the hand it carries
+  static constexpr double viscous = 0.02;          // N m s/rad
+  static constexpr double arm = 0.1;               // m, pivot to strain gauge / contact point
+  static constexpr double wall_angle = 0.35;       // rad
+  static constexpr double wall_stiffness = 200.0;  // N m/rad = 20 kN/m at the tip
+  static constexpr double wall_damping = 0.4;      // N m s/rad
+  static constexpr double hand_stiffness = 3.0;    // N m/rad = 300 N/m at the tip, a relaxed arm
+  static constexpr double hand_damping = 0.15;     // N m s/rad, near critical for the hand on the lever
   static constexpr double counts_per_rev = 4096.0 * 4.0;
-  static constexpr double gauge_noise_n = 0.01;     // N rms
-  static constexpr double gauge_range_n = 50.0;     // +-, 16-bit ADC
+  static constexpr double gauge_noise_n = 0.01;  // N rms
+  static constexpr double gauge_range_n = 50.0;  // +-, 16-bit ADC
 };
 
 Trace lever_wall_trace(const GeneratorOptions& options) {
@@ -135,9 +135,9 @@ struct Segment3 {
 
 // The paper's 3-DoF task: a cursor exploring a rigid sphere in a virtual environment, force by eq. (11).
 struct SphereScene {
-  static constexpr double radius = 0.05;          // m
-  static constexpr double stiffness = 300.0;      // N/m, within what a desktop 3-DoF device renders stably
-  static constexpr double position_lsb = 55e-6;   // m, a desktop device's nominal position resolution
+  static constexpr double radius = 0.05;         // m
+  static constexpr double stiffness = 300.0;     // N/m, within what a desktop 3-DoF device renders stably
+  static constexpr double position_lsb = 55e-6;  // m, a desktop device's nominal position resolution
 };
 
 Trace sphere_trace(const GeneratorOptions& options) {

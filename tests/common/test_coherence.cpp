@@ -57,8 +57,7 @@ int run_link(const Config<T>& config, Q quantizer, std::uint64_t seed) {
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("sender and receiver stay bit-identical without quantization", "[codec][coherence]", float,
-                   double) {
+TEMPLATE_TEST_CASE("sender and receiver stay bit-identical without quantization", "[codec][coherence]", float, double) {
   const auto mode = GENERATE(Mode::deadband, Mode::predictive);
   const auto filter_hz = GENERATE(0.0, 30.0);
   const Config<TestType> config{mode, TestType(0.1), TestType(0.01), static_cast<TestType>(filter_hz)};
@@ -66,8 +65,8 @@ TEMPLATE_TEST_CASE("sender and receiver stay bit-identical without quantization"
   CHECK(run_link<TestType, 3>(config, IdentityQuantizer<TestType>{}, 2) > 10);
 }
 
-TEMPLATE_TEST_CASE("sender and receiver stay bit-identical with fixed-point quantization", "[codec][coherence]",
-                   float, double) {
+TEMPLATE_TEST_CASE("sender and receiver stay bit-identical with fixed-point quantization", "[codec][coherence]", float,
+                   double) {
   const auto mode = GENERATE(Mode::deadband, Mode::predictive);
   const auto filter_hz = GENERATE(0.0, 30.0);
   const Config<TestType> config{mode, TestType(0.05), TestType(0.0), static_cast<TestType>(filter_hz)};
@@ -79,8 +78,7 @@ TEMPLATE_TEST_CASE("sender and receiver stay bit-identical with fixed-point quan
 TEST_CASE("a sender that ignored quantization would drift from its receiver", "[codec][coherence]") {
   // The control experiment for the test above: the unquantized model differs from what the receiver decodes.
   const FixedPointQuantizer<double, std::int16_t> wire{0.01};
-  DeadbandSender<double, 1, FixedPointQuantizer<double, std::int16_t>> quantized({Mode::predictive, 0.05, 0, 0},
-                                                                                 wire);
+  DeadbandSender<double, 1, FixedPointQuantizer<double, std::int16_t>> quantized({Mode::predictive, 0.05, 0, 0}, wire);
   DeadbandSender<double, 1> unquantized({Mode::predictive, 0.05, 0, 0});
   NoisySignal<double, 1> signal{Rng(5)};
   int differing = 0;

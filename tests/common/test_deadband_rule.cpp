@@ -36,8 +36,7 @@ TEST_CASE("the deadband scales with the reference (Weber's law)", "[codec][rule]
   CHECK_FALSE(large.offer(0.001, {10.5}).send);
 }
 
-TEST_CASE("a zero reference sends every change under the paper's rule, and none within the floor",
-          "[codec][rule]") {
+TEST_CASE("a zero reference sends every change under the paper's rule, and none within the floor", "[codec][rule]") {
   DeadbandSender<double, 1> paper(deadband(0.1));
   paper.offer(0.0, {0.0});
   CHECK_FALSE(paper.offer(0.001, {0.0}).send);
@@ -45,14 +44,14 @@ TEST_CASE("a zero reference sends every change under the paper's rule, and none 
 
   DeadbandSender<double, 1> floored(deadband(0.1, 0.25));
   floored.offer(0.0, {0.0});
-  CHECK_FALSE(floored.offer(0.001, {0.25}).send);   // equal to the floor: kept
+  CHECK_FALSE(floored.offer(0.001, {0.25}).send);  // equal to the floor: kept
   CHECK_FALSE(floored.offer(0.002, {-0.25}).send);
   CHECK(floored.offer(0.003, {std::nextafter(0.25, 1.0)}).send);
 }
 
 TEST_CASE("the floor only matters where the relative deadband is smaller", "[codec][rule]") {
   DeadbandSender<double, 1> sender(deadband(0.5, 0.25));
-  sender.offer(0.0, {4.0});                        // relative threshold 2.0 beats the floor
+  sender.offer(0.0, {4.0});  // relative threshold 2.0 beats the floor
   CHECK_FALSE(sender.offer(0.001, {6.0}).send);
   CHECK(sender.offer(0.002, {std::nextafter(6.0, 7.0)}).send);
 }

@@ -1,6 +1,6 @@
 // The N-DoF deadzone is a sphere (paper section III-C): decisions do not depend on direction.
-#include <catch2/catch.hpp>
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "lever/codec/codec.hpp"
@@ -50,8 +50,8 @@ TEST_CASE("a direction change is sent exactly when sin(angle) > p (eq. 6-8)", "[
     // A second direction orthogonal to the reference.
     auto other = unit({rng.normal(), rng.normal(), rng.normal()});
     const double along = other[0] * reference[0] + other[1] * reference[1] + other[2] * reference[2];
-    const auto orthogonal = unit({other[0] - along * reference[0], other[1] - along * reference[1],
-                                  other[2] - along * reference[2]});
+    const auto orthogonal =
+        unit({other[0] - along * reference[0], other[1] - along * reference[1], other[2] - along * reference[2]});
     const double magnitude = rng.uniform(0.1, 100.0);
     // At angle a with length cos(a)|v_i| the tip lies at distance sin(a)|v_i| from v_i's tip.
     for (const double scale : {0.999, 1.001}) {

@@ -15,7 +15,7 @@ TEST_CASE("the predictor follows the slope of the last two transmitted samples",
   model.accept(0.012, {3.0});        // slope 500 per second
   CHECK(model.at(0.012)[0] == 3.0);
   CHECK(model.at(0.016)[0] == Approx(5.0).epsilon(1e-12));
-  model.accept(0.013, {3.0});        // flat again
+  model.accept(0.013, {3.0});  // flat again
   CHECK(model.at(0.050)[0] == 3.0);
 }
 

@@ -1,9 +1,10 @@
 // lever-codec's input validation: every bad file is named with its line and problem.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 #include "trace_csv.hpp"
 
@@ -75,7 +76,8 @@ TEST_CASE("bad traces are rejected with file, line and problem", "[tool][csv]") 
 }
 
 TEST_CASE("a missing file is named", "[tool][csv]") {
-  CHECK_THROWS_WITH(read_trace("/nonexistent/trace.csv"), "/nonexistent/trace.csv: cannot open: No such file or directory");
+  CHECK_THROWS_WITH(read_trace("/nonexistent/trace.csv"),
+                    "/nonexistent/trace.csv: cannot open: No such file or directory");
 }
 
 TEST_CASE("an atomic write leaves either the whole file or nothing", "[tool][csv]") {

@@ -1,6 +1,6 @@
 // The example traces: deterministic per seed and physically plausible.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 

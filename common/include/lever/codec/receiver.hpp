@@ -13,7 +13,7 @@
 namespace lever::codec {
 
 template <typename T, std::size_t N, typename Q = IdentityQuantizer<T>>
-  requires Quantizer<Q, T>
+requires Quantizer<Q, T>
 class DeadbandReceiver {
  public:
   using Wire = std::array<typename Q::wire_type, N>;

@@ -21,7 +21,7 @@ constexpr bool exceeds_deadzone(const Vec<T, N>& reference, const Vec<T, N>& val
 }
 
 template <typename T, std::size_t N, typename Q = IdentityQuantizer<T>>
-  requires Quantizer<Q, T>
+requires Quantizer<Q, T>
 class DeadbandSender {
  public:
   using Wire = std::array<typename Q::wire_type, N>;
