@@ -1,0 +1,262 @@
+#pragma once
+// The lever CAN message set (classic CAN 2.0A, 1 Mbit/s). The single written spec is
+// common/protocol/lever.dbc with docs/can-protocol.md; tests/common/test_protocol_dbc.cpp proves these packers
+// agree with the DBC bit for bit.
+//
+// Identifiers carry the lever pair (0..15) in their low bits so that several pairs share one bus; lower ids win
+// arbitration, so commands outrank data and data outranks heartbeats.
+#include <cstdint>
+#include <numbers>
+
+#include "lever/codec/config.hpp"
+#include "lever/protocol/bit_field.hpp"
+#include "lever/protocol/can_frame.hpp"
+
+namespace lever::protocol {
+
+enum class Role : std::uint8_t { hsi = 0, top = 1 };
+
+constexpr std::uint8_t kPairCount = 16;
+constexpr std::uint32_t kCommandBase = 0x080;    // 0x080 + pair
+constexpr std::uint32_t kMotionBase = 0x100;     // 0x100 + pair, HSI -> TOP
+constexpr std::uint32_t kForceBase = 0x110;      // 0x110 + pair, TOP -> HSI
+constexpr std::uint32_t kHeartbeatBase = 0x700;  // 0x700 + 2 * pair + role
+
+constexpr std::uint32_t command_id(std::uint8_t pair) noexcept { return kCommandBase + pair; }
+constexpr std::uint32_t motion_id(std::uint8_t pair) noexcept { return kMotionBase + pair; }
+constexpr std::uint32_t force_id(std::uint8_t pair) noexcept { return kForceBase + pair; }
+constexpr std::uint32_t heartbeat_id(std::uint8_t pair, Role role) noexcept {
+  return kHeartbeatBase + 2u * pair + static_cast<std::uint32_t>(role);
+}
+
+// Stable numbers: they are counted and reported.
+enum class DecodeError : std::uint8_t {
+  none = 0,
+  unknown_id = 1,    // not a lever protocol id
+  wrong_dlc = 2,     // payload length differs from the message's
+  out_of_range = 3,  // an enumeration or reserved field holds a value the protocol does not define
+};
+
+enum class MessageKind : std::uint8_t { command, motion, force, heartbeat };
+
+struct FrameAddress {
+  MessageKind kind{};
+  std::uint8_t pair = 0;
+  Role role = Role::hsi;  // the sender's role (heartbeat); HSI for motion, TOP for force; unused for command
+};
+
+// What an identifier means, or unknown_id.
+constexpr DecodeError classify(std::uint32_t id, FrameAddress& out) noexcept {
+  if (id >= kCommandBase && id < kCommandBase + kPairCount) {
+    out = {MessageKind::command, static_cast<std::uint8_t>(id - kCommandBase), Role::hsi};
+  } else if (id >= kMotionBase && id < kMotionBase + kPairCount) {
+    out = {MessageKind::motion, static_cast<std::uint8_t>(id - kMotionBase), Role::hsi};
+  } else if (id >= kForceBase && id < kForceBase + kPairCount) {
+    out = {MessageKind::force, static_cast<std::uint8_t>(id - kForceBase), Role::top};
+  } else if (id >= kHeartbeatBase && id < kHeartbeatBase + 2u * kPairCount) {
+    const auto offset = id - kHeartbeatBase;
+    out = {MessageKind::heartbeat, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
+  } else {
+    return DecodeError::unknown_id;
+  }
+  return DecodeError::none;
+}
+
+// ---- Scaling (docs/can-protocol.md justifies each choice) ----
+// Position: one count of a 4096-line encoder read x4; int16 spans +-2 turns.
+inline constexpr double kPositionLsbRad = 2.0 * std::numbers::pi / 16384.0;
+// Velocity: 1 mrad/s; int16 spans +-32.767 rad/s, past the 20 rad/s a hand reaches.
+inline constexpr double kVelocityLsb = 1e-3;
+// Force: 10 uN in a signed 24-bit field, +-83.886 N: +-50 N with margin, 100x finer than the 1 mN asked.
+inline constexpr double kForceLsb = 1e-5;
+inline constexpr std::int32_t kForceCodeMax = (1 << 23) - 1;
+inline constexpr std::int32_t kForceCodeMin = -(1 << 23);
+// Deadband parameters in the command frame.
+inline constexpr double kPLsb = 1e-4;         // p up to 6.5535
+inline constexpr double kFloorLsb = 1e-3;     // rad/s or N, up to 65.535
+inline constexpr double kFilterHzLsb = 0.1;   // up to 6553.5 Hz; 0 = off
+
+// Flags shared by both data frames.
+struct DataFlags {
+  bool value_saturated = false;     // position (motion) or force (force) hit its field's range
+  bool velocity_saturated = false;  // motion only
+  bool refresh = false;             // sent to refresh the receiver's reference, not because of the deadband
+  codec::Mode mode = codec::Mode::deadband;  // the model the receiver must use from this sample on
+};
+
+// HSI -> TOP: velocity through the deadband, with the position riding on every frame (paper section III-A).
+struct MotionMessage {
+  std::int16_t position = 0;  // kPositionLsbRad
+  std::int16_t velocity = 0;  // kVelocityLsb
+  std::uint16_t tick = 0;     // sender's 1 ms sample tick, modulo 2^16
+  std::uint8_t seq = 0;       // per-direction data sequence number
+  DataFlags flags;
+};
+
+// TOP -> HSI: measured contact force through the deadband.
+struct ForceMessage {
+  std::int32_t force = 0;  // kForceLsb, 24 bits on the wire
+  std::uint16_t tick = 0;
+  std::uint8_t seq = 0;
+  DataFlags flags;
+};
+
+// Stable numbers: on the wire in heartbeats.
+enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault = 3 };
+
+struct HeartbeatMessage {
+  LeverState state = LeverState::init;
+  std::uint16_t faults = 0;           // latched fault bits (firmware/core/include/lever/fw/faults.hpp)
+  std::uint8_t last_data_seq = 0;     // sequence number of the sender's last data frame
+  std::uint8_t seq_gaps = 0;          // data frames found missing, saturating
+  std::uint8_t rejected_frames = 0;   // frames that failed to decode, saturating
+  std::uint8_t counter = 0;           // heartbeat count, rolling
+  std::uint8_t encoder_errors = 0;    // illegal quadrature transitions, saturating
+};
+
+// Stable numbers: on the wire.
+enum class Opcode : std::uint8_t { arm = 1, disarm = 2, rearm = 3, tare = 4, set_deadband = 5 };
+enum class Direction : std::uint8_t { motion = 0, force = 1 };
+
+struct CommandMessage {
+  Opcode opcode = Opcode::arm;
+  bool to_hsi = true;
+  bool to_top = true;
+  // set_deadband only:
+  Direction direction = Direction::motion;
+  codec::Mode mode = codec::Mode::deadband;
+  std::uint16_t p = 0;          // kPLsb
+  std::uint16_t floor = 0;      // kFloorLsb
+  std::uint16_t filter_hz = 0;  // kFilterHzLsb
+};
+
+// ---- Packing: every field fits by construction of the types, so packing cannot fail ----
+
+namespace detail {
+constexpr std::uint64_t pack_flags(const DataFlags& f) noexcept {
+  return (f.value_saturated ? 1u : 0u) | (f.velocity_saturated ? 2u : 0u) | (f.refresh ? 4u : 0u) |
+         (f.mode == codec::Mode::predictive ? 8u : 0u);
+}
+constexpr DecodeError unpack_flags(std::uint64_t raw, DataFlags& f) noexcept {
+  if (raw & 0xF0u) return DecodeError::out_of_range;  // reserved bits
+  f.value_saturated = raw & 1u;
+  f.velocity_saturated = raw & 2u;
+  f.refresh = raw & 4u;
+  f.mode = (raw & 8u) ? codec::Mode::predictive : codec::Mode::deadband;
+  return DecodeError::none;
+}
+constexpr CanFrame frame(std::uint32_t id) noexcept { return CanFrame{id, 8, {}}; }
+}  // namespace detail
+
+constexpr CanFrame pack(const MotionMessage& m, std::uint8_t pair) noexcept {
+  CanFrame f = detail::frame(motion_id(pair));
+  put_signed_bits(f.data, 0, 16, m.position);
+  put_signed_bits(f.data, 16, 16, m.velocity);
+  put_bits(f.data, 32, 16, m.tick);
+  put_bits(f.data, 48, 8, m.seq);
+  put_bits(f.data, 56, 8, detail::pack_flags(m.flags));
+  return f;
+}
+
+constexpr CanFrame pack(const ForceMessage& m, std::uint8_t pair) noexcept {
+  CanFrame f = detail::frame(force_id(pair));
+  const std::int32_t code = m.force > kForceCodeMax ? kForceCodeMax : m.force < kForceCodeMin ? kForceCodeMin : m.force;
+  put_signed_bits(f.data, 0, 24, code);
+  put_bits(f.data, 24, 16, m.tick);
+  put_bits(f.data, 40, 8, m.seq);
+  // A force outside the 24-bit field is clipped, and says so.
+  DataFlags flags = m.flags;
+  flags.value_saturated = flags.value_saturated || code != m.force;
+  put_bits(f.data, 48, 8, detail::pack_flags(flags));
+  return f;
+}
+
+constexpr CanFrame pack(const HeartbeatMessage& m, std::uint8_t pair, Role role) noexcept {
+  CanFrame f = detail::frame(heartbeat_id(pair, role));
+  put_bits(f.data, 0, 8, static_cast<std::uint8_t>(m.state));
+  put_bits(f.data, 8, 16, m.faults);
+  put_bits(f.data, 24, 8, m.last_data_seq);
+  put_bits(f.data, 32, 8, m.seq_gaps);
+  put_bits(f.data, 40, 8, m.rejected_frames);
+  put_bits(f.data, 48, 8, m.counter);
+  put_bits(f.data, 56, 8, m.encoder_errors);
+  return f;
+}
+
+constexpr CanFrame pack(const CommandMessage& m, std::uint8_t pair) noexcept {
+  CanFrame f = detail::frame(command_id(pair));
+  put_bits(f.data, 0, 8, static_cast<std::uint8_t>(m.opcode));
+  put_bits(f.data, 8, 1, m.to_hsi);
+  put_bits(f.data, 9, 1, m.to_top);
+  put_bits(f.data, 10, 1, static_cast<std::uint8_t>(m.direction));
+  put_bits(f.data, 11, 2, static_cast<std::uint8_t>(m.mode));
+  put_bits(f.data, 16, 16, m.p);
+  put_bits(f.data, 32, 16, m.floor);
+  put_bits(f.data, 48, 16, m.filter_hz);
+  return f;
+}
+
+// ---- Decoding: the id's kind must match, the DLC must be 8, enumerations must be defined ----
+
+namespace detail {
+constexpr DecodeError expect(const CanFrame& f, MessageKind kind, FrameAddress& address) noexcept {
+  if (const auto e = classify(f.id, address); e != DecodeError::none) return e;
+  if (address.kind != kind) return DecodeError::unknown_id;
+  if (f.dlc != 8) return DecodeError::wrong_dlc;
+  return DecodeError::none;
+}
+}  // namespace detail
+
+constexpr DecodeError decode(const CanFrame& f, MotionMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::motion, address); e != DecodeError::none) return e;
+  m.position = static_cast<std::int16_t>(get_signed_bits(f.data, 0, 16));
+  m.velocity = static_cast<std::int16_t>(get_signed_bits(f.data, 16, 16));
+  m.tick = static_cast<std::uint16_t>(get_bits(f.data, 32, 16));
+  m.seq = static_cast<std::uint8_t>(get_bits(f.data, 48, 8));
+  return detail::unpack_flags(get_bits(f.data, 56, 8), m.flags);
+}
+
+constexpr DecodeError decode(const CanFrame& f, ForceMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::force, address); e != DecodeError::none) return e;
+  if (get_bits(f.data, 56, 8) != 0) return DecodeError::out_of_range;  // reserved byte
+  m.force = static_cast<std::int32_t>(get_signed_bits(f.data, 0, 24));
+  m.tick = static_cast<std::uint16_t>(get_bits(f.data, 24, 16));
+  m.seq = static_cast<std::uint8_t>(get_bits(f.data, 40, 8));
+  if (const auto e = detail::unpack_flags(get_bits(f.data, 48, 8), m.flags); e != DecodeError::none) return e;
+  return m.flags.velocity_saturated ? DecodeError::out_of_range : DecodeError::none;
+}
+
+constexpr DecodeError decode(const CanFrame& f, HeartbeatMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::heartbeat, address); e != DecodeError::none) return e;
+  const auto state = get_bits(f.data, 0, 8);
+  if (state > static_cast<std::uint8_t>(LeverState::fault)) return DecodeError::out_of_range;
+  m.state = static_cast<LeverState>(state);
+  m.faults = static_cast<std::uint16_t>(get_bits(f.data, 8, 16));
+  m.last_data_seq = static_cast<std::uint8_t>(get_bits(f.data, 24, 8));
+  m.seq_gaps = static_cast<std::uint8_t>(get_bits(f.data, 32, 8));
+  m.rejected_frames = static_cast<std::uint8_t>(get_bits(f.data, 40, 8));
+  m.counter = static_cast<std::uint8_t>(get_bits(f.data, 48, 8));
+  m.encoder_errors = static_cast<std::uint8_t>(get_bits(f.data, 56, 8));
+  return DecodeError::none;
+}
+
+constexpr DecodeError decode(const CanFrame& f, CommandMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::command, address); e != DecodeError::none) return e;
+  const auto opcode = get_bits(f.data, 0, 8);
+  if (opcode < static_cast<std::uint8_t>(Opcode::arm) || opcode > static_cast<std::uint8_t>(Opcode::set_deadband))
+    return DecodeError::out_of_range;
+  const auto mode = get_bits(f.data, 11, 2);
+  if (mode > static_cast<std::uint8_t>(codec::Mode::predictive)) return DecodeError::out_of_range;
+  if (get_bits(f.data, 13, 3) != 0) return DecodeError::out_of_range;  // reserved
+  m.opcode = static_cast<Opcode>(opcode);
+  m.to_hsi = get_bits(f.data, 8, 1);
+  m.to_top = get_bits(f.data, 9, 1);
+  m.direction = static_cast<Direction>(get_bits(f.data, 10, 1));
+  m.mode = static_cast<codec::Mode>(mode);
+  m.p = static_cast<std::uint16_t>(get_bits(f.data, 16, 16));
+  m.floor = static_cast<std::uint16_t>(get_bits(f.data, 32, 16));
+  m.filter_hz = static_cast<std::uint16_t>(get_bits(f.data, 48, 16));
+  return DecodeError::none;
+}
+
+}  // namespace lever::protocol

@@ -1,0 +1,83 @@
+#pragma once
+// Contact force from a weighing amplifier: calibration, tare, staleness and saturation. A sample too old to
+// trust yields no value at all (std::nullopt), never the last number silently reused.
+#include <cstdint>
+#include <optional>
+
+namespace lever::fw {
+
+using Tick = std::uint64_t;  // firmware sample ticks, 1 ms each
+
+// One amplifier reading as the HAL delivers it: raw ADC code and when it was taken.
+struct ForceReading {
+  std::int32_t raw = 0;
+  Tick tick = 0;
+  bool error = false;  // the transport (Modbus) or the amplifier reported a failed reading
+};
+
+class StrainGauge {
+ public:
+  struct Config {
+    double newton_per_count = 100.0 / 65536.0;  // 16-bit amplifier over +-50 N
+    double offset_counts = 0.0;                 // zero-force code, replaced by tare
+    std::int32_t raw_min = -32768;              // codes at or beyond these are saturated
+    std::int32_t raw_max = 32767;
+    Tick stale_after = 5;                // ticks; an amplifier sampling at 600 Hz delivers every 1.7 ms
+    std::uint16_t tare_samples = 64;     // readings averaged by a tare
+  };
+  struct State {
+    std::optional<double> force;  // newtons, calibrated; empty when stale or never read
+    bool stale = true;
+    bool saturated = false;
+    Tick last_tick = 0;
+    bool seen = false;
+    double value_counts = 0.0;  // newest raw reading
+    double offset_counts = 0.0;
+    std::uint16_t tare_left = 0;
+    double tare_sum = 0.0;
+  };
+
+  constexpr StrainGauge() noexcept : StrainGauge(Config{}) {}
+  explicit constexpr StrainGauge(const Config& config) noexcept : config_(config) {
+    state_.offset_counts = config.offset_counts;
+  }
+  constexpr const Config& config() const noexcept { return config_; }
+  constexpr const State& state() const noexcept { return state_; }
+
+  // The newest reading the HAL has (possibly the same as last tick), evaluated at `now`.
+  constexpr std::optional<double> update(const std::optional<ForceReading>& reading, Tick now) noexcept {
+    if (reading && !reading->error) {
+      const bool fresh = !state_.seen || reading->tick != state_.last_tick;
+      state_.seen = true;
+      state_.last_tick = reading->tick;
+      state_.saturated = reading->raw <= config_.raw_min || reading->raw >= config_.raw_max;
+      if (fresh && state_.tare_left > 0) accumulate_tare(reading->raw);
+      state_.value_counts = static_cast<double>(reading->raw);
+    }
+    state_.stale = !state_.seen || now - state_.last_tick > config_.stale_after || state_.last_tick > now;
+    if (state_.stale) {
+      state_.force.reset();
+    } else {
+      state_.force = (state_.value_counts - state_.offset_counts) * config_.newton_per_count;
+    }
+    return state_.force;
+  }
+
+  // Average the next tare_samples fresh readings and take them as zero force.
+  constexpr void start_tare() noexcept {
+    state_.tare_left = config_.tare_samples;
+    state_.tare_sum = 0.0;
+  }
+  constexpr bool taring() const noexcept { return state_.tare_left > 0; }
+
+ private:
+  constexpr void accumulate_tare(std::int32_t raw) noexcept {
+    state_.tare_sum += raw;
+    if (--state_.tare_left == 0) state_.offset_counts = state_.tare_sum / config_.tare_samples;
+  }
+
+  Config config_;
+  State state_;
+};
+
+}  // namespace lever::fw

@@ -1,0 +1,43 @@
+// Instantiates the lever core for both encoder flavours with a minimal HAL, compiled -fno-exceptions
+// -fno-rtti; cmake/check_freestanding.sh then proves the object needs no heap, exceptions or OS.
+#include <cstddef>
+#include <optional>
+
+#include "lever/fw/lever.hpp"
+
+namespace lever::fw::freestanding {
+
+struct EdgeEncoder {
+  std::size_t drain_edges(AbState*, std::size_t) { return 0; }
+};
+struct CountingEncoder {
+  std::int32_t read_counts() { return 0; }
+};
+struct Force {
+  std::optional<ForceReading> latest() { return std::nullopt; }
+};
+struct Motor {
+  void command(const MotorCommand&) {}
+  bool driver_fault() const { return false; }
+};
+struct Can {
+  bool receive(protocol::CanFrame&) { return false; }
+  bool send(const protocol::CanFrame&) { return true; }
+};
+
+template <typename Encoder>
+struct Hal {
+  Encoder encoder_;
+  Force force_;
+  Motor motor_;
+  Can can_;
+  Encoder& encoder() { return encoder_; }
+  Force& force() { return force_; }
+  Motor& motor() { return motor_; }
+  Can& can() { return can_; }
+};
+
+}  // namespace lever::fw::freestanding
+
+template class lever::fw::Lever<lever::fw::freestanding::Hal<lever::fw::freestanding::EdgeEncoder>>;
+template class lever::fw::Lever<lever::fw::freestanding::Hal<lever::fw::freestanding::CountingEncoder>>;
