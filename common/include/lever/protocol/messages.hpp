@@ -72,15 +72,15 @@ inline constexpr double kForceLsb = 1e-5;
 inline constexpr std::int32_t kForceCodeMax = (1 << 23) - 1;
 inline constexpr std::int32_t kForceCodeMin = -(1 << 23);
 // Deadband parameters in the command frame.
-inline constexpr double kPLsb = 1e-4;         // p up to 6.5535
-inline constexpr double kFloorLsb = 1e-3;     // rad/s or N, up to 65.535
-inline constexpr double kFilterHzLsb = 0.1;   // up to 6553.5 Hz; 0 = off
+inline constexpr double kPLsb = 1e-4;        // p up to 6.5535
+inline constexpr double kFloorLsb = 1e-3;    // rad/s or N, up to 65.535
+inline constexpr double kFilterHzLsb = 0.1;  // up to 6553.5 Hz; 0 = off
 
 // Flags shared by both data frames.
 struct DataFlags {
-  bool value_saturated = false;     // position (motion) or force (force) hit its field's range
-  bool velocity_saturated = false;  // motion only
-  bool refresh = false;             // sent to refresh the receiver's reference, not because of the deadband
+  bool value_saturated = false;              // position (motion) or force (force) hit its field's range
+  bool velocity_saturated = false;           // motion only
+  bool refresh = false;                      // sent to refresh the receiver's reference, not because of the deadband
   codec::Mode mode = codec::Mode::deadband;  // the model the receiver must use from this sample on
 };
 
@@ -106,12 +106,12 @@ enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault 
 
 struct HeartbeatMessage {
   LeverState state = LeverState::init;
-  std::uint16_t faults = 0;           // latched fault bits (firmware/core/include/lever/fw/faults.hpp)
-  std::uint8_t last_data_seq = 0;     // sequence number of the sender's last data frame
-  std::uint8_t seq_gaps = 0;          // data frames found missing, saturating
-  std::uint8_t rejected_frames = 0;   // frames that failed to decode, saturating
-  std::uint8_t counter = 0;           // heartbeat count, rolling
-  std::uint8_t encoder_errors = 0;    // illegal quadrature transitions, saturating
+  std::uint16_t faults = 0;          // latched fault bits (firmware/core/include/lever/fw/faults.hpp)
+  std::uint8_t last_data_seq = 0;    // sequence number of the sender's last data frame
+  std::uint8_t seq_gaps = 0;         // data frames found missing, saturating
+  std::uint8_t rejected_frames = 0;  // frames that failed to decode, saturating
+  std::uint8_t counter = 0;          // heartbeat count, rolling
+  std::uint8_t encoder_errors = 0;   // illegal quadrature transitions, saturating
 };
 
 // Stable numbers: on the wire.

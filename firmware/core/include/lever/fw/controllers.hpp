@@ -16,8 +16,8 @@ constexpr double clamp_torque(double torque, double limit) noexcept {
 class PositionController {
  public:
   struct Config {
-    double kp = 40.0;          // N m / rad
-    double kd = 0.6;           // N m s / rad
+    double kp = 40.0;            // N m / rad
+    double kd = 0.6;             // N m s / rad
     double kff_velocity = 0.02;  // N m s / rad: cancels the lever's viscous friction
   };
   struct State {
@@ -49,12 +49,13 @@ class PositionController {
 class ForceDisplay {
  public:
   struct Config {
-    double lever_arm_m = 0.1;   // pivot to handle
-    double gain = 1.0;          // force scaling from TOP to HSI
+    double lever_arm_m = 0.1;  // pivot to handle
+    double gain = 1.0;         // force scaling from TOP to HSI
     bool closed_loop = false;
-    double kp = 0.5;            // per unit force error
-    double ki = 20.0;           // 1/s
+    double kp = 0.5;   // per unit force error
+    double ki = 20.0;  // 1/s
     double integral_limit_n = 5.0;
+    double damping_nms = 0.05;  // local viscous damping on the HSI, N m s/rad (see docs/firmware.md)
   };
   struct State {
     double desired_force = 0.0;
@@ -71,8 +72,9 @@ class ForceDisplay {
 
   // remote_force: reconstructed TOP contact force (N, positive = pushing into the wall).
   // own_force: the HSI gauge's reading of the hand force, when closed loop and available.
+  // velocity: the HSI lever's, for the local damping.
   // The displayed torque opposes the operator's push, hence the minus sign.
-  constexpr double update(double remote_force, const double* own_force, double dt) noexcept {
+  constexpr double update(double remote_force, const double* own_force, double velocity, double dt) noexcept {
     state_.desired_force = config_.gain * remote_force;
     double force = state_.desired_force;
     if (config_.closed_loop && own_force != nullptr) {
@@ -82,7 +84,7 @@ class ForceDisplay {
       if (state_.integral < -config_.integral_limit_n) state_.integral = -config_.integral_limit_n;
       force += config_.kp * state_.force_error + state_.integral;
     }
-    state_.torque = -force * config_.lever_arm_m;
+    state_.torque = -force * config_.lever_arm_m - config_.damping_nms * velocity;
     return state_.torque;
   }
 

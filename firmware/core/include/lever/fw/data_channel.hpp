@@ -44,6 +44,7 @@ class DataSender {
   // In user units (cut-off in Hz).
   constexpr const codec::Config<double>& config() const noexcept { return config_; }
   constexpr std::uint8_t last_seq() const noexcept { return static_cast<std::uint8_t>(seq_ - 1u); }
+  constexpr const Sender& codec_sender() const noexcept { return sender_; }
 
   constexpr void reconfigure(const codec::Config<double>& config) noexcept {
     config_ = config;

@@ -59,9 +59,15 @@ concept LeverHal = requires(H& h) {
   h.force();
   h.motor();
   h.can();
-} && (EdgeEncoderPort<EncoderOf<H>> || CountingEncoderPort<EncoderOf<H>>) &&
-                   ForcePort<std::remove_cvref_t<decltype(std::declval<H&>().force())>> &&
-                   MotorPort<std::remove_cvref_t<decltype(std::declval<H&>().motor())>> &&
-                   CanPort<std::remove_cvref_t<decltype(std::declval<H&>().can())>>;
+}
+&&(EdgeEncoderPort<EncoderOf<H>> || CountingEncoderPort<EncoderOf<H>>)&&ForcePort<std::remove_cvref_t<
+    decltype(std::declval<H&>()
+                 .force())>>&& MotorPort<std::
+                                             remove_cvref_t<
+                                                 decltype(std::declval<H&>()
+                                                              .motor())>>&& CanPort<std::
+                                                                                        remove_cvref_t<
+                                                                                            decltype(std::declval<H&>()
+                                                                                                         .can())>>;
 
 }  // namespace lever::fw

@@ -23,9 +23,9 @@
 namespace lever::fw {
 
 struct LeverCounters {
-  std::uint32_t rx_frames = 0;          // frames for this pair, decoded
-  std::uint32_t rx_rejected = 0;        // frames for this pair that failed to decode
-  std::uint32_t rx_stale = 0;           // duplicate or reordered data frames, not used
+  std::uint32_t rx_frames = 0;    // frames for this pair, decoded
+  std::uint32_t rx_rejected = 0;  // frames for this pair that failed to decode
+  std::uint32_t rx_stale = 0;     // duplicate or reordered data frames, not used
   std::uint32_t tx_frames = 0;
   std::uint32_t tx_dropped = 0;         // the CAN queue was full
   std::uint32_t data_sent = 0;          // deadband data frames sent
@@ -35,14 +35,14 @@ struct LeverCounters {
 struct LeverTelemetry {
   double position_rad = 0.0;
   double velocity_rad_s = 0.0;
-  std::optional<double> force_n;         // own strain gauge, calibrated; empty when stale
-  std::optional<double> remote;          // reconstructed peer value: HSI velocity at the TOP, force at the HSI
-  double position_ref_rad = 0.0;         // TOP tracking reference
+  std::optional<double> force_n;  // own strain gauge, calibrated; empty when stale
+  std::optional<double> remote;   // reconstructed peer value: HSI velocity at the TOP, force at the HSI
+  double position_ref_rad = 0.0;  // TOP tracking reference
   double velocity_ref_rad_s = 0.0;
-  double torque_demand_nm = 0.0;         // before the limit
-  double torque_nm = 0.0;                // commanded
+  double torque_demand_nm = 0.0;  // before the limit
+  double torque_nm = 0.0;         // commanded
   bool motor_enabled = false;
-  bool sent_data = false;                // this tick
+  bool sent_data = false;  // this tick
 };
 
 template <LeverHal H>
@@ -263,7 +263,7 @@ class Lever {
       telemetry_.remote = force_rx_.value_at(now);
       const double remote_force = telemetry_.remote.value_or(0.0);
       const double* own = telemetry_.force_n ? &*telemetry_.force_n : nullptr;
-      return display_.update(remote_force, own, dt);
+      return display_.update(remote_force, own, telemetry_.velocity_rad_s, dt);
     }
     if (have_motion_) {
       telemetry_.remote = motion_rx_.value_at(now);

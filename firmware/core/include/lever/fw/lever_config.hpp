@@ -22,8 +22,11 @@ struct LeverConfig {
   Tick refresh_period = 100;   // the data sender transmits at least this often, so a lost update heals
 
   // Deadband per direction (cut-off in Hz). Only the sending end of a direction uses its codec config.
-  codec::Config<double> motion_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};  // HSI velocity
-  codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};   // TOP contact force
+  // The floors are not the paper's rule (floor 0) on purpose: a smooth velocity estimate decays toward zero
+  // by more than p every tick and a strain gauge's noise never is zero, so without a floor the pure rule
+  // sends nearly every sample at rest (measured: 82 % velocity frames in the closed-loop test).
+  codec::Config<double> motion_codec{codec::Mode::deadband, 0.1, 0.02, 0.0};  // HSI velocity, rad/s
+  codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.05, 0.0};   // TOP contact force, N
 
   // Sensors.
   double counts_per_rev = 16384.0;  // 4096 lines read x4
@@ -37,12 +40,12 @@ struct LeverConfig {
   ForceDisplay::Config display{};
 
   // Safety.
-  double torque_limit_nm = 1.0;         // never exceeded, whatever arrives on the bus
-  Tick torque_saturation_ticks = 250;   // demand above the limit this long is a fault
+  double torque_limit_nm = 1.0;        // never exceeded, whatever arrives on the bus
+  Tick torque_saturation_ticks = 250;  // demand above the limit this long is a fault
   double position_min_rad = -1.0;
   double position_max_rad = 1.0;
-  double safe_hold_torque_nm = 0.3;     // TOP after a fault: hold position with at most this torque...
-  Tick safe_hold_ticks = 500;           // ...for this long, then zero torque
+  double safe_hold_torque_nm = 0.3;  // TOP after a fault: hold position with at most this torque...
+  Tick safe_hold_ticks = 500;        // ...for this long, then zero torque
 };
 
 constexpr bool is_valid(const LeverConfig& c) noexcept {

@@ -22,8 +22,8 @@ class StrainGauge {
     double offset_counts = 0.0;                 // zero-force code, replaced by tare
     std::int32_t raw_min = -32768;              // codes at or beyond these are saturated
     std::int32_t raw_max = 32767;
-    Tick stale_after = 5;                // ticks; an amplifier sampling at 600 Hz delivers every 1.7 ms
-    std::uint16_t tare_samples = 64;     // readings averaged by a tare
+    Tick stale_after = 5;             // ticks; an amplifier sampling at 600 Hz delivers every 1.7 ms
+    std::uint16_t tare_samples = 64;  // readings averaged by a tare
   };
   struct State {
     std::optional<double> force;  // newtons, calibrated; empty when stale or never read

@@ -1,0 +1,163 @@
+// The CAN message set: ids, round trips, and decoding errors as codes.
+#include <catch2/catch.hpp>
+
+#include "lever/common/rng.hpp"
+#include "lever/protocol/messages.hpp"
+
+using namespace lever::protocol;
+
+TEST_CASE("ids carry the pair, and lower ids win arbitration for commands and data", "[protocol]") {
+  CHECK(command_id(0) == 0x080);
+  CHECK(motion_id(3) == 0x103);
+  CHECK(force_id(15) == 0x11F);
+  CHECK(heartbeat_id(0, Role::hsi) == 0x700);
+  CHECK(heartbeat_id(2, Role::top) == 0x705);
+  CHECK(command_id(15) < motion_id(0));
+  CHECK(force_id(15) < heartbeat_id(0, Role::hsi));
+  CHECK(heartbeat_id(15, Role::top) <= kMaxStandardId);
+
+  FrameAddress a;
+  REQUIRE(classify(0x705, a) == DecodeError::none);
+  CHECK(a.kind == MessageKind::heartbeat);
+  CHECK(a.pair == 2);
+  CHECK(a.role == Role::top);
+  CHECK(classify(0x120, a) == DecodeError::unknown_id);
+  CHECK(classify(0x720, a) == DecodeError::unknown_id);
+  CHECK(classify(0x7FF, a) == DecodeError::unknown_id);
+}
+
+TEST_CASE("every message survives pack and decode for random contents", "[protocol]") {
+  lever::Rng rng(1);
+  FrameAddress a;
+  for (int i = 0; i < 2000; ++i) {
+    const auto pair = static_cast<std::uint8_t>(rng.next() % kPairCount);
+    MotionMessage m;
+    m.position = static_cast<std::int16_t>(rng.next());
+    m.velocity = static_cast<std::int16_t>(rng.next());
+    m.tick = static_cast<std::uint16_t>(rng.next());
+    m.seq = static_cast<std::uint8_t>(rng.next());
+    m.flags = {(rng.next() & 1) != 0, (rng.next() & 1) != 0, (rng.next() & 1) != 0,
+               (rng.next() & 1) ? lever::codec::Mode::predictive : lever::codec::Mode::deadband};
+    MotionMessage back;
+    REQUIRE(decode(pack(m, pair), back, a) == DecodeError::none);
+    CHECK(a.pair == pair);
+    CHECK((back.position == m.position && back.velocity == m.velocity && back.tick == m.tick && back.seq == m.seq));
+    CHECK((back.flags.value_saturated == m.flags.value_saturated && back.flags.refresh == m.flags.refresh &&
+           back.flags.velocity_saturated == m.flags.velocity_saturated && back.flags.mode == m.flags.mode));
+
+    ForceMessage f;
+    f.force = static_cast<std::int32_t>(rng.next() % (1u << 24)) - (1 << 23);
+    f.tick = static_cast<std::uint16_t>(rng.next());
+    f.seq = static_cast<std::uint8_t>(rng.next());
+    f.flags.refresh = (rng.next() & 1) != 0;
+    ForceMessage fback;
+    REQUIRE(decode(pack(f, pair), fback, a) == DecodeError::none);
+    CHECK((fback.force == f.force && fback.tick == f.tick && fback.seq == f.seq &&
+           fback.flags.refresh == f.flags.refresh));
+
+    HeartbeatMessage h{static_cast<LeverState>(rng.next() % 4), static_cast<std::uint16_t>(rng.next()),
+                       static_cast<std::uint8_t>(rng.next()),   static_cast<std::uint8_t>(rng.next()),
+                       static_cast<std::uint8_t>(rng.next()),   static_cast<std::uint8_t>(rng.next()),
+                       static_cast<std::uint8_t>(rng.next())};
+    const Role role = (rng.next() & 1) ? Role::top : Role::hsi;
+    HeartbeatMessage hback;
+    REQUIRE(decode(pack(h, pair, role), hback, a) == DecodeError::none);
+    CHECK(a.role == role);
+    CHECK((hback.state == h.state && hback.faults == h.faults && hback.last_data_seq == h.last_data_seq &&
+           hback.seq_gaps == h.seq_gaps && hback.rejected_frames == h.rejected_frames && hback.counter == h.counter &&
+           hback.encoder_errors == h.encoder_errors));
+
+    CommandMessage c;
+    c.opcode = static_cast<Opcode>(1 + rng.next() % 5);
+    c.to_hsi = (rng.next() & 1) != 0;
+    c.to_top = (rng.next() & 1) != 0;
+    c.direction = (rng.next() & 1) ? Direction::force : Direction::motion;
+    c.mode = (rng.next() & 1) ? lever::codec::Mode::predictive : lever::codec::Mode::deadband;
+    c.p = static_cast<std::uint16_t>(rng.next());
+    c.floor = static_cast<std::uint16_t>(rng.next());
+    c.filter_hz = static_cast<std::uint16_t>(rng.next());
+    CommandMessage cback;
+    REQUIRE(decode(pack(c, pair), cback, a) == DecodeError::none);
+    CHECK((cback.opcode == c.opcode && cback.to_hsi == c.to_hsi && cback.to_top == c.to_top &&
+           cback.direction == c.direction && cback.mode == c.mode && cback.p == c.p && cback.floor == c.floor &&
+           cback.filter_hz == c.filter_hz));
+  }
+}
+
+TEST_CASE("a force beyond the 24-bit field saturates and says so, never wraps", "[protocol]") {
+  FrameAddress a;
+  ForceMessage f;
+  f.force = 50'000'000;  // 500 N
+  ForceMessage back;
+  REQUIRE(decode(pack(f, 0), back, a) == DecodeError::none);
+  CHECK(back.force == kForceCodeMax);
+  CHECK(back.flags.value_saturated);
+  f.force = -50'000'000;
+  REQUIRE(decode(pack(f, 0), back, a) == DecodeError::none);
+  CHECK(back.force == kForceCodeMin);
+  CHECK(back.flags.value_saturated);
+  CHECK(kForceCodeMax * kForceLsb > 50.0);  // the +-50 N the levers need fit
+  CHECK(kForceLsb <= 1e-3);                 // at 1 mN or better
+}
+
+TEST_CASE("malformed frames are error codes", "[protocol]") {
+  FrameAddress a;
+  MotionMessage m;
+  CanFrame good = pack(MotionMessage{}, 0);
+
+  CanFrame short_frame = good;
+  short_frame.dlc = 7;
+  CHECK(decode(short_frame, m, a) == DecodeError::wrong_dlc);
+  CanFrame long_frame = good;
+  long_frame.dlc = 15;  // CAN FD length codes do not belong here
+  CHECK(decode(long_frame, m, a) == DecodeError::wrong_dlc);
+
+  CanFrame wrong_kind = pack(ForceMessage{}, 0);
+  CHECK(decode(wrong_kind, m, a) == DecodeError::unknown_id);
+  CanFrame foreign = good;
+  foreign.id = 0x123;
+  CHECK(decode(foreign, m, a) == DecodeError::unknown_id);
+
+  CanFrame reserved_flag = good;
+  reserved_flag.data[7] = 0x10;
+  CHECK(decode(reserved_flag, m, a) == DecodeError::out_of_range);
+
+  HeartbeatMessage h;
+  CanFrame bad_state = pack(HeartbeatMessage{}, 0, Role::hsi);
+  bad_state.data[0] = 9;
+  CHECK(decode(bad_state, h, a) == DecodeError::out_of_range);
+
+  CommandMessage c;
+  CanFrame bad_opcode = pack(CommandMessage{}, 0);
+  bad_opcode.data[0] = 0;
+  CHECK(decode(bad_opcode, c, a) == DecodeError::out_of_range);
+  bad_opcode.data[0] = 6;
+  CHECK(decode(bad_opcode, c, a) == DecodeError::out_of_range);
+  CanFrame bad_mode = pack(CommandMessage{}, 0);
+  bad_mode.data[1] = static_cast<std::uint8_t>(bad_mode.data[1] | (3u << 3));
+  CHECK(decode(bad_mode, c, a) == DecodeError::out_of_range);
+
+  ForceMessage f;
+  CanFrame reserved_byte = pack(ForceMessage{}, 0);
+  reserved_byte.data[7] = 1;
+  CHECK(decode(reserved_byte, f, a) == DecodeError::out_of_range);
+}
+
+TEST_CASE("every possible payload decodes to a value or an error, never anything else", "[protocol]") {
+  // Random bytes on every id of pair 0 and random lengths: decoding must return, with a defined code.
+  lever::Rng rng(99);
+  for (int i = 0; i < 20000; ++i) {
+    CanFrame f;
+    f.id = static_cast<std::uint32_t>(rng.next() % 0x800);
+    f.dlc = static_cast<std::uint8_t>(rng.next() % 16);
+    for (auto& b : f.data) b = static_cast<std::uint8_t>(rng.next());
+    FrameAddress a;
+    MotionMessage m;
+    ForceMessage fo;
+    HeartbeatMessage h;
+    CommandMessage c;
+    for (const auto e : {decode(f, m, a), decode(f, fo, a), decode(f, h, a), decode(f, c, a)}) {
+      CHECK(static_cast<int>(e) <= static_cast<int>(DecodeError::out_of_range));
+    }
+  }
+}

@@ -1,0 +1,109 @@
+#pragma once
+// A lever's hardware for tests: an encoder, a strain gauge, a motor driver and a port on an in-memory CAN bus.
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "lever/fw/hal.hpp"
+
+namespace lever::test {
+
+using fw::AbState;
+using fw::ForceReading;
+using fw::MotorCommand;
+using protocol::CanFrame;
+
+// Every frame sent is seen by every other port, as on a real bus; a port does not hear itself.
+class CanBus {
+ public:
+  class Port {
+   public:
+    Port(CanBus& bus, std::size_t index) : bus_(&bus), index_(index) {}
+    bool receive(CanFrame& frame) {
+      auto& queue = bus_->rx_[index_];
+      if (queue.empty()) return false;
+      frame = queue.front();
+      queue.pop_front();
+      return true;
+    }
+    bool send(const CanFrame& frame) {
+      if (bus_->tx_full) return false;
+      bus_->log.push_back(frame);
+      for (std::size_t i = 0; i < bus_->rx_.size(); ++i)
+        if (i != index_ && !bus_->cut) bus_->rx_[i].push_back(frame);
+      return true;
+    }
+
+   private:
+    CanBus* bus_;
+    std::size_t index_;
+  };
+
+  Port attach() {
+    rx_.emplace_back();
+    return Port(*this, rx_.size() - 1);
+  }
+  // A frame from outside any lever (a host, an attacker, a test).
+  void inject(const CanFrame& frame) {
+    for (auto& queue : rx_) queue.push_back(frame);
+  }
+
+  std::vector<CanFrame> log;
+  bool cut = false;      // frames are sent but nobody receives them
+  bool tx_full = false;  // the controller's queue refuses frames
+
+ private:
+  std::vector<std::deque<CanFrame>> rx_;
+};
+
+struct FakeEncoder {
+  std::int32_t counts = 0;
+  std::int32_t read_counts() const { return counts; }
+};
+
+struct FakeEdgeEncoder {
+  std::vector<AbState> pending;
+  std::size_t drain_edges(AbState* out, std::size_t capacity) {
+    const std::size_t n = pending.size() < capacity ? pending.size() : capacity;
+    for (std::size_t i = 0; i < n; ++i) out[i] = pending[i];
+    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(n));
+    return n;
+  }
+};
+
+struct FakeForceSensor {
+  std::optional<ForceReading> reading;
+  std::optional<ForceReading> latest() const { return reading; }
+};
+
+struct FakeMotor {
+  MotorCommand last;
+  bool fault = false;
+  double max_abs_torque = 0.0;  // over the whole test
+  void command(const MotorCommand& c) {
+    last = c;
+    const double a = c.torque_nm < 0 ? -c.torque_nm : c.torque_nm;
+    if (a > max_abs_torque) max_abs_torque = a;
+  }
+  bool driver_fault() const { return fault; }
+};
+
+template <typename Encoder = FakeEncoder>
+struct FakeHal {
+  explicit FakeHal(CanBus& bus) : can_(bus.attach()) {}
+  Encoder encoder_;
+  FakeForceSensor force_;
+  FakeMotor motor_;
+  CanBus::Port can_;
+  Encoder& encoder() { return encoder_; }
+  FakeForceSensor& force() { return force_; }
+  FakeMotor& motor() { return motor_; }
+  CanBus::Port& can() { return can_; }
+};
+
+static_assert(fw::LeverHal<FakeHal<FakeEncoder>>);
+static_assert(fw::LeverHal<FakeHal<FakeEdgeEncoder>>);
+
+}  // namespace lever::test

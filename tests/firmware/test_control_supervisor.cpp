@@ -1,0 +1,78 @@
+// Control laws and the safety state machine.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "lever/fw/controllers.hpp"
+#include "lever/fw/supervisor.hpp"
+
+using namespace lever::fw;
+
+TEST_CASE("PD with velocity feed-forward", "[firmware][control]") {
+  PositionController c({10.0, 0.5, 0.02});
+  CHECK(c.update(0.1, 2.0, 0.0, 1.0) == Approx(10.0 * 0.1 + 0.5 * 1.0 + 0.02 * 2.0));
+  CHECK(c.state().position_error == Approx(0.1));
+  CHECK(c.state().velocity_error == Approx(1.0));
+}
+
+TEST_CASE("clamp_torque bounds every value, NaN included", "[firmware][control]") {
+  CHECK(clamp_torque(5.0, 1.0) == 1.0);
+  CHECK(clamp_torque(-5.0, 1.0) == -1.0);
+  CHECK(clamp_torque(0.5, 1.0) == 0.5);
+  CHECK(clamp_torque(std::nan(""), 1.0) == 0.0);
+  CHECK(clamp_torque(INFINITY, 1.0) == 1.0);
+}
+
+TEST_CASE("the force display opposes the push, open and closed loop", "[firmware][control]") {
+  ForceDisplay open({0.1, 1.0, false, 0.5, 20.0, 5.0, 0.0});
+  CHECK(open.update(10.0, nullptr, 0.0, 1e-3) == Approx(-1.0));  // 10 N at 0.1 m
+
+  ForceDisplay closed({0.1, 1.0, true, 0.5, 20.0, 5.0, 0.0});
+  const double own = 8.0;  // the hand feels 2 N too little
+  const double first = closed.update(10.0, &own, 0.0, 1e-3);
+  CHECK(first == Approx(-(10.0 + 0.5 * 2.0 + 20.0 * 2.0 * 1e-3) * 0.1));
+  double torque = first;
+  for (int i = 0; i < 10000; ++i) torque = closed.update(10.0, &own, 0.0, 1e-3);
+  CHECK(closed.state().integral == Approx(5.0));  // anti-windup
+  CHECK(torque == Approx(-(10.0 + 1.0 + 5.0) * 0.1));
+}
+
+TEST_CASE("supervisor: init, arm, fault, re-arm", "[firmware][supervisor]") {
+  Supervisor s;
+  CHECK(s.state() == LeverState::init);
+  CHECK_FALSE(s.arm(0));  // not before boot
+  s.boot_complete();
+  CHECK(s.state() == LeverState::disarmed);
+  CHECK_FALSE(s.arm(bit(Fault::force_stale)));  // not while a fault condition holds
+  CHECK(s.arm(0));
+  CHECK(s.armed());
+
+  s.report(bit(Fault::comms_timeout), 1234);
+  CHECK(s.state() == LeverState::fault);
+  CHECK(s.fault_since() == 1234);
+  CHECK(has(s.latched(), Fault::comms_timeout));
+  s.report(0, 1235);  // the condition went away: still latched, still in fault
+  CHECK(s.state() == LeverState::fault);
+  CHECK_FALSE(s.arm(0));                            // arm does not clear faults; re-arm does
+  CHECK_FALSE(s.rearm(bit(Fault::comms_timeout)));  // not while it holds
+  CHECK(s.state() == LeverState::fault);
+  CHECK(s.rearm(0));
+  CHECK(s.armed());
+  CHECK(s.latched() == 0);
+}
+
+TEST_CASE("supervisor: disarm keeps faults latched; faults latch while disarmed too", "[firmware][supervisor]") {
+  Supervisor s;
+  s.boot_complete();
+  REQUIRE(s.arm(0));
+  s.report(bit(Fault::encoder), 5);
+  CHECK(s.disarm());
+  CHECK(s.state() == LeverState::disarmed);
+  CHECK(has(s.latched(), Fault::encoder));
+  CHECK_FALSE(s.arm(0));
+  CHECK(s.rearm(0));
+  CHECK(s.disarm());
+  s.report(bit(Fault::motor_driver), 9);
+  CHECK(s.state() == LeverState::disarmed);
+  CHECK(has(s.latched(), Fault::motor_driver));
+  CHECK_FALSE(s.disarm());  // nothing to disarm
+}

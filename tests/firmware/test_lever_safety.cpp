@@ -1,0 +1,313 @@
+// The lever core's safety behaviour: every fault kind, within one tick, torque always limited, re-arm.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "lever/common/rng.hpp"
+#include "lever_rig.hpp"
+
+using namespace lever;
+using namespace lever::fw;
+using lever::test::PairRig;
+using protocol::Opcode;
+
+namespace {
+
+// Runs until the lever leaves `armed`; returns the tick it did.
+Tick run_until_fault(PairRig& rig, const Lever<test::FakeHal<>>& lever, Tick limit = 2000) {
+  for (Tick i = 0; i < limit; ++i) {
+    rig.tick();
+    if (lever.supervisor().state() == LeverState::fault) return rig.now - 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+TEST_CASE("both levers arm once they hear each other", "[firmware][lever]") {
+  PairRig rig;
+  rig.command(Opcode::arm);  // too early: no peer heard yet
+  rig.run(2);
+  CHECK(rig.hsi.supervisor().state() == LeverState::disarmed);
+  CHECK(rig.hsi.counters().commands_rejected == 1u);
+  rig.boot_and_arm();
+  CHECK(rig.hsi.supervisor().armed());
+  CHECK(rig.top.supervisor().armed());
+}
+
+TEST_CASE("deadband silence is not loss: a still lever raises no comms fault", "[firmware][lever][watchdog]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  const auto sent_before = rig.hsi.counters().data_sent;
+  rig.run(10000);  // ten seconds of nothing happening
+  CHECK(rig.hsi.supervisor().armed());
+  CHECK(rig.top.supervisor().armed());
+  // Only the refresh keeps data flowing: about one frame per 100 ms.
+  const auto sent = rig.hsi.counters().data_sent - sent_before;
+  CHECK(sent >= 95u);
+  CHECK(sent <= 110u);
+}
+
+TEST_CASE("real loss is: a cut bus latches COMMS just after the timeout", "[firmware][lever][watchdog]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  rig.run(500);
+  rig.bus.cut = true;
+  const Tick cut_at = rig.now;
+  const Tick fault_at = run_until_fault(rig, rig.top);
+  REQUIRE(fault_at != 0);
+  CHECK(has(rig.top.supervisor().latched(), Fault::comms_timeout));
+  // Silent for more than 50 ticks, counted from the last frame heard (a heartbeat or data up to 50 ticks
+  // before the cut).
+  CHECK(fault_at - cut_at <= 51u);
+  rig.run(2);  // the HSI last heard the TOP within a tick of when the TOP last heard it
+  CHECK(rig.hsi.supervisor().state() == LeverState::fault);
+}
+
+TEST_CASE("a fault takes the TOP to a limited hold in the same tick, then to zero torque", "[firmware][lever]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  rig.hand_target = 0.1;
+  rig.run(1000);
+  rig.bus.cut = true;
+  const Tick fault_at = run_until_fault(rig, rig.top);
+  REQUIRE(fault_at != 0);
+  const auto& cfg = rig.top.config();
+  CHECK(std::fabs(rig.top_hal.motor_.last.torque_nm) <= cfg.safe_hold_torque_nm);
+  rig.run(cfg.safe_hold_ticks - 2);
+  CHECK(rig.top_hal.motor_.last.enable);  // still holding
+  rig.run(2);
+  CHECK_FALSE(rig.top_hal.motor_.last.enable);
+  CHECK(rig.top_hal.motor_.last.torque_nm == 0.0);
+  // The HSI displays nothing from the fault's tick on.
+  CHECK_FALSE(rig.hsi_hal.motor_.last.enable);
+  CHECK(rig.hsi_hal.motor_.last.torque_nm == 0.0);
+}
+
+TEST_CASE("every fault kind latches, makes the lever safe in one tick, and re-arm recovers", "[firmware][lever]") {
+  struct Case {
+    const char* name;
+    Fault expected;
+    void (*inject)(PairRig&);
+    void (*heal)(PairRig&);
+  };
+  const Case cases[] = {
+      {"motor driver", Fault::motor_driver, [](PairRig& r) { r.top_hal.motor_.fault = true; },
+       [](PairRig& r) { r.top_hal.motor_.fault = false; }},
+      {"force stale", Fault::force_stale, [](PairRig& r) { r.gauge_alive = false; },
+       [](PairRig& r) { r.gauge_alive = true; }},
+      {"force saturated", Fault::force_saturated,
+       [](PairRig& r) {
+         r.gauge_alive = false;
+         r.top_hal.force_.reading = ForceReading{32767, r.now, false};
+       },
+       [](PairRig& r) { r.gauge_alive = true; }},
+      {"position limit", Fault::position_limit, [](PairRig& r) { r.top_plant.angle = 1.5; },
+       [](PairRig& r) {
+         r.top_plant.angle = 0.0;
+         r.top_plant.speed = 0.0;
+       }},
+  };
+  for (const auto& c : cases) {
+    SECTION(c.name) {
+      PairRig rig;
+      rig.boot_and_arm();
+      rig.run(200);
+      c.inject(rig);
+      if (c.expected == Fault::force_saturated) {
+        // Keep the saturated reading fresh.
+        for (int i = 0; i < 3 && rig.top.supervisor().armed(); ++i) {
+          rig.top_hal.force_.reading->tick = rig.now;
+          rig.tick();
+        }
+      } else {
+        rig.run(c.expected == Fault::force_stale ? 7 : 1);
+      }
+      REQUIRE(rig.top.supervisor().state() == LeverState::fault);
+      CHECK(has(rig.top.supervisor().latched(), c.expected));
+      CHECK(std::fabs(rig.top_hal.motor_.last.torque_nm) <= rig.top.config().safe_hold_torque_nm);
+      if (c.expected == Fault::motor_driver) CHECK_FALSE(rig.top_hal.motor_.last.enable);  // nothing to hold with
+
+      rig.command(Opcode::rearm, false, true);  // refused while the condition holds
+      if (c.expected == Fault::force_saturated) rig.top_hal.force_.reading->tick = rig.now;
+      rig.tick();
+      CHECK(rig.top.supervisor().state() == LeverState::fault);
+
+      c.heal(rig);
+      rig.run(5);
+      rig.command(Opcode::rearm, false, true);
+      rig.run(2);
+      CHECK(rig.top.supervisor().armed());
+      CHECK(rig.top.supervisor().latched() == 0);
+    }
+  }
+}
+
+TEST_CASE("an encoder glitch storm latches ENCODER and the TOP lets go rather than hold blind",
+          "[firmware][lever][encoder]") {
+  test::CanBus bus;
+  test::FakeHal<test::FakeEdgeEncoder> hal(bus);
+  LeverConfig config = test::rig_config(protocol::Role::top);
+  Lever<test::FakeHal<test::FakeEdgeEncoder>> top(hal, config);
+  hal.force_.reading = ForceReading{0, 0, false};
+  Tick now = 1;
+  auto heartbeat_from_hsi = [&] { bus.inject(protocol::pack(protocol::HeartbeatMessage{}, 0, protocol::Role::hsi)); };
+  constexpr AbState kForward[4] = {0b00, 0b01, 0b11, 0b10};
+  int phase = 0;
+  for (; now < 50; ++now) {
+    hal.force_.reading->tick = now;
+    heartbeat_from_hsi();
+    hal.encoder_.pending.clear();
+    for (int e = 0; e < 3; ++e) hal.encoder_.pending.push_back(kForward[++phase % 4]);  // legal forward edges
+    top.step(now);
+  }
+  bus.inject(protocol::pack(protocol::CommandMessage{}, 0));  // arm
+  hal.force_.reading->tick = now;
+  top.step(now++);
+  REQUIRE(top.supervisor().armed());
+  const AbState here = kForward[phase % 4], opposite = kForward[(phase + 2) % 4];
+  hal.encoder_.pending.clear();
+  for (int e = 0; e < 10; ++e) hal.encoder_.pending.push_back(e % 2 ? here : opposite);  // both lines flipping
+  hal.force_.reading->tick = now;
+  heartbeat_from_hsi();
+  top.step(now++);
+  CHECK(top.supervisor().state() == LeverState::fault);
+  CHECK(has(top.supervisor().latched(), Fault::encoder));
+  CHECK_FALSE(hal.motor_.last.enable);
+  CHECK(top.decoder().illegal_transitions() > config.decoder.illegal_threshold);
+}
+
+TEST_CASE("a TOP told to go far away saturates, then latches TORQUE_LIMIT", "[firmware][lever]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  // The HSI stops streaming (disarmed, heartbeats go on); a frame continuing its sequence asks the TOP to go
+  // to 0.9 rad. The load is heavy (1 kg m^2), so the motor saturates long before it gets anywhere, and
+  // certainly before it could hit the wall hard enough to saturate the gauge first.
+  rig.top_plant.inertia = 1.0;
+  rig.command(Opcode::disarm, true, false);
+  rig.run(2);
+  protocol::MotionMessage m;
+  m.position = static_cast<std::int16_t>(0.9 / protocol::kPositionLsbRad);
+  m.seq = static_cast<std::uint8_t>(rig.hsi.motion_sender().last_seq() + 1);
+  m.tick = static_cast<std::uint16_t>(rig.now);
+  rig.bus.inject(protocol::pack(m, 0));
+  const Tick start = rig.now;
+  const Tick fault_at = run_until_fault(rig, rig.top);
+  REQUIRE(fault_at != 0);
+  INFO("latched faults: " << rig.top.supervisor().latched());
+  CHECK(has(rig.top.supervisor().latched(), Fault::torque_limit));
+  CHECK(fault_at - start >= rig.top.config().torque_saturation_ticks);
+  CHECK(rig.top_hal.motor_.max_abs_torque <= rig.top.config().torque_limit_nm);
+}
+
+TEST_CASE("whatever arrives on the bus, commanded torque never exceeds the limit", "[firmware][lever][fuzz]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  Rng rng(2024);
+  for (int i = 0; i < 20000; ++i) {
+    // Well-formed frames with hostile contents, malformed frames, and random commands, several per tick.
+    for (int k = 0; k < 3; ++k) {
+      protocol::CanFrame f;
+      switch (rng.next() % 4) {
+        case 0: {
+          protocol::MotionMessage m;
+          m.position = static_cast<std::int16_t>(rng.next());
+          m.velocity = static_cast<std::int16_t>(rng.next());
+          m.tick = static_cast<std::uint16_t>(rng.next());
+          m.seq = static_cast<std::uint8_t>(rng.next());
+          m.flags.mode = rng.next() & 1 ? codec::Mode::predictive : codec::Mode::deadband;
+          f = protocol::pack(m, 0);
+          break;
+        }
+        case 1: {
+          protocol::ForceMessage m;
+          m.force = static_cast<std::int32_t>(rng.next() % (1u << 24)) - (1 << 23);
+          m.tick = static_cast<std::uint16_t>(rng.next());
+          m.seq = static_cast<std::uint8_t>(rng.next());
+          f = protocol::pack(m, 0);
+          break;
+        }
+        case 2: {
+          protocol::CommandMessage c;
+          c.opcode = static_cast<Opcode>(1 + rng.next() % 5);
+          c.direction = rng.next() & 1 ? protocol::Direction::force : protocol::Direction::motion;
+          c.p = static_cast<std::uint16_t>(rng.next());
+          c.floor = static_cast<std::uint16_t>(rng.next());
+          c.filter_hz = static_cast<std::uint16_t>(rng.next());
+          f = protocol::pack(c, 0);
+          break;
+        }
+        default:
+          f.id = static_cast<std::uint32_t>(rng.next() % 0x800);
+          f.dlc = static_cast<std::uint8_t>(rng.next() % 16);
+          for (auto& b : f.data) b = static_cast<std::uint8_t>(rng.next());
+      }
+      rig.bus.inject(f);
+    }
+    rig.tick();
+  }
+  CHECK(rig.top_hal.motor_.max_abs_torque <= rig.top.config().torque_limit_nm);
+  CHECK(rig.hsi_hal.motor_.max_abs_torque <= rig.hsi.config().torque_limit_nm);
+  CHECK(rig.top.counters().rx_rejected > 0u);
+  CHECK(rig.top.counters().rx_stale > 0u);
+}
+
+TEST_CASE("tare is accepted only while disarmed", "[firmware][lever]") {
+  PairRig rig;
+  rig.run(60);
+  rig.command(Opcode::tare, false, true);
+  rig.run(1);
+  CHECK(rig.top.gauge().taring());
+  rig.run(100);
+  CHECK_FALSE(rig.top.gauge().taring());
+  rig.command(Opcode::arm);
+  rig.run(2);
+  REQUIRE(rig.top.supervisor().armed());
+  const auto rejected = rig.top.counters().commands_rejected;
+  rig.command(Opcode::tare, false, true);
+  rig.run(1);
+  CHECK_FALSE(rig.top.gauge().taring());
+  CHECK(rig.top.counters().commands_rejected == rejected + 1);
+}
+
+TEST_CASE("set_deadband reconfigures the sending end and the receiver follows at the same sample",
+          "[firmware][lever]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  protocol::CommandMessage c;
+  c.opcode = Opcode::set_deadband;
+  c.direction = protocol::Direction::motion;
+  c.mode = codec::Mode::predictive;
+  c.p = 500;          // 5 %
+  c.floor = 20;       // 0.02 rad/s
+  c.filter_hz = 300;  // 30 Hz
+  rig.bus.inject(protocol::pack(c, 0));
+  rig.run(2);
+  const auto& cfg = rig.hsi.motion_sender().config();
+  CHECK(cfg.mode == codec::Mode::predictive);
+  CHECK(cfg.p == Approx(0.05));
+  CHECK(cfg.floor == Approx(0.02));
+  CHECK(cfg.filter_hz == Approx(30.0));
+  CHECK(rig.top.motion_receiver().codec_receiver().model().mode() == codec::Mode::predictive);
+  // A force-direction change goes to the TOP's sender and leaves the HSI's alone.
+  c.direction = protocol::Direction::force;
+  c.mode = codec::Mode::deadband;
+  c.p = 250;
+  c.floor = 50;
+  c.filter_hz = 0;
+  rig.bus.inject(protocol::pack(c, 0));
+  rig.run(2);
+  CHECK(rig.hsi.motion_sender().config().mode == codec::Mode::predictive);
+  CHECK(rig.top.force_sender().config().p == Approx(0.025));
+  CHECK(rig.top.force_sender().config().floor == Approx(0.05));
+}
+
+TEST_CASE("frames of another pair are ignored, not counted as errors", "[firmware][lever]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  protocol::CommandMessage disarm;
+  disarm.opcode = Opcode::disarm;
+  rig.bus.inject(protocol::pack(disarm, 5));
+  rig.run(2);
+  CHECK(rig.top.supervisor().armed());
+  CHECK(rig.top.counters().rx_rejected == 0u);
+}

@@ -1,0 +1,149 @@
+// Quadrature decoding, velocity estimation and the strain gauge.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "lever/fw/quadrature_decoder.hpp"
+#include "lever/fw/strain_gauge.hpp"
+#include "lever/fw/velocity_estimator.hpp"
+
+using namespace lever::fw;
+
+namespace {
+// Forward Gray sequence in (A<<1)|B coding: 00, 01, 11, 10.
+constexpr AbState kForward[4] = {0b00, 0b01, 0b11, 0b10};
+}  // namespace
+
+TEST_CASE("the decoder's transition table: +1 forward, -1 backward, 0 unchanged, illegal when both lines flip",
+          "[firmware][encoder]") {
+  for (int from = 0; from < 4; ++from) {
+    for (int to = 0; to < 4; ++to) {
+      QuadratureDecoder d;
+      d.reset(static_cast<AbState>(from));
+      d.feed(static_cast<AbState>(to));
+      int from_index = 0, to_index = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (kForward[i] == from) from_index = i;
+        if (kForward[i] == to) to_index = i;
+      }
+      const int distance = (to_index - from_index + 4) % 4;
+      INFO("from " << from << " to " << to);
+      if (distance == 0) {
+        CHECK(d.counts() == 0);
+        CHECK(d.illegal_transitions() == 0u);
+      } else if (distance == 1) {
+        CHECK(d.counts() == 1);
+      } else if (distance == 3) {
+        CHECK(d.counts() == -1);
+      } else {
+        CHECK(d.counts() == 0);
+        CHECK(d.illegal_transitions() == 1u);
+      }
+    }
+  }
+}
+
+TEST_CASE("a full revolution counts 4 per line, both ways", "[firmware][encoder]") {
+  QuadratureDecoder d;
+  d.reset(kForward[0]);
+  for (int i = 1; i <= 4096 * 4; ++i) d.feed(kForward[i % 4]);
+  CHECK(d.counts() == 16384);
+  for (int i = 4096 * 4 - 1; i >= 0; --i) d.feed(kForward[i % 4]);
+  CHECK(d.counts() == 0);
+  CHECK_FALSE(d.fault());
+}
+
+TEST_CASE("illegal transitions latch an encoder fault past the threshold; re-arming restarts the tally",
+          "[firmware][encoder]") {
+  QuadratureDecoder d({3});
+  d.reset(0b00);
+  for (int i = 0; i < 3; ++i) {
+    d.feed(0b11);
+    d.feed(0b00);
+  }
+  CHECK(d.illegal_transitions() == 6u);
+  CHECK(d.fault());
+  d.feed(0b01);  // good edges do not clear it
+  CHECK(d.fault());
+  d.clear_fault();
+  CHECK_FALSE(d.fault());
+  CHECK(d.counts() == 1);
+}
+
+TEST_CASE("backward difference is exact on a ramp and quantized in counts", "[firmware][velocity]") {
+  VelocityEstimator v({VelocityMethod::backward_difference, 0.0});
+  v.update(0.0, 1e-3);
+  CHECK(v.update(0.002, 1e-3) == Approx(2.0));
+  CHECK(v.update(0.005, 1e-3) == Approx(3.0));
+}
+
+TEST_CASE("the tracking loop follows a ramp with less noise than the backward difference", "[firmware][velocity]") {
+  const double count = 2.0 * std::numbers::pi / 16384.0;
+  VelocityEstimator loop({VelocityMethod::tracking_loop, 300.0});
+  VelocityEstimator diff({VelocityMethod::backward_difference, 0.0});
+  const double speed = 0.7;  // rad/s: 1.8 counts per ms, so the difference jumps between 1 and 2 counts
+  double loop_sq = 0, diff_sq = 0;
+  int n = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double angle = std::floor(speed * k * 1e-3 / count) * count;
+    const double a = loop.update(angle, 1e-3);
+    const double b = diff.update(angle, 1e-3);
+    if (k > 500) {  // after the loop settled
+      loop_sq += (a - speed) * (a - speed);
+      diff_sq += (b - speed) * (b - speed);
+      ++n;
+    }
+  }
+  const double loop_rms = std::sqrt(loop_sq / n), diff_rms = std::sqrt(diff_sq / n);
+  CHECK(loop_rms < 0.1);
+  CHECK(loop_rms * 3 < diff_rms);
+}
+
+TEST_CASE("the strain gauge applies its calibration", "[firmware][gauge]") {
+  StrainGauge g({0.01, 100.0, -32768, 32767, 5, 4});
+  const auto f = g.update(ForceReading{600, 10, false}, 10);
+  REQUIRE(f.has_value());
+  CHECK(*f == Approx(5.0));
+  CHECK_FALSE(g.state().stale);
+  CHECK_FALSE(g.state().saturated);
+}
+
+TEST_CASE("a reading older than the staleness window gives no force, not the old number", "[firmware][gauge]") {
+  StrainGauge g({0.01, 0.0, -32768, 32767, 5, 4});
+  CHECK_FALSE(g.update(std::nullopt, 0).has_value());  // never read
+  CHECK(g.state().stale);
+  const ForceReading r{100, 10, false};
+  CHECK(g.update(r, 10).has_value());
+  CHECK(g.update(r, 15).has_value());  // 5 ticks old: still within the window
+  CHECK_FALSE(g.update(r, 16).has_value());
+  CHECK(g.state().stale);
+  CHECK(g.update(ForceReading{100, 16, false}, 16).has_value());       // a fresh sample heals it
+  CHECK_FALSE(g.update(ForceReading{100, 17, true}, 30).has_value());  // a failed transfer is no sample
+}
+
+TEST_CASE("codes at the ADC's limits are saturated", "[firmware][gauge]") {
+  StrainGauge g({0.01, 0.0, -1000, 1000, 5, 4});
+  g.update(ForceReading{999, 1, false}, 1);
+  CHECK_FALSE(g.state().saturated);
+  g.update(ForceReading{1000, 2, false}, 2);
+  CHECK(g.state().saturated);
+  g.update(ForceReading{-1000, 3, false}, 3);
+  CHECK(g.state().saturated);
+}
+
+TEST_CASE("tare averages fresh readings only and zeroes the force", "[firmware][gauge]") {
+  StrainGauge g({0.01, 0.0, -32768, 32767, 5, 4});
+  g.start_tare();
+  const std::int32_t raws[] = {200, 202, 198, 200};
+  Tick tick = 1;
+  for (const auto raw : raws) {
+    g.update(ForceReading{raw, tick, false}, tick);
+    g.update(ForceReading{raw, tick, false}, tick + 1);  // the same sample twice: counted once
+    tick += 2;
+  }
+  CHECK_FALSE(g.taring());
+  CHECK(g.state().offset_counts == Approx(200.0));
+  const auto f = g.update(ForceReading{300, tick, false}, tick);
+  REQUIRE(f);
+  CHECK(*f == Approx(1.0));
+}
