@@ -1,0 +1,220 @@
+// lever-bench-core: time per Lever::step() for each role in a running HSI/TOP pair, and the static memory of
+// one lever instance. Prints one JSON object.
+//
+// Each step is timed on its own with steady_clock; the clock's own cost (the median of back-to-back reads)
+// is reported and subtracted. Several repetitions; the figure of merit is the median across them.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+#include "lever/fw/lever.hpp"
+
+namespace {
+
+using namespace lever;
+using Clock = std::chrono::steady_clock;
+
+// Fixed-capacity CAN queue: no heap in the timed path.
+class RingQueue {
+ public:
+  bool push(const protocol::CanFrame& f) {
+    if (count_ == frames_.size()) return false;
+    frames_[(head_ + count_++) % frames_.size()] = f;
+    return true;
+  }
+  bool pop(protocol::CanFrame& f) {
+    if (count_ == 0) return false;
+    f = frames_[head_];
+    head_ = (head_ + 1) % frames_.size();
+    --count_;
+    return true;
+  }
+
+ private:
+  std::array<protocol::CanFrame, 64> frames_{};
+  std::size_t head_ = 0, count_ = 0;
+};
+
+struct BenchHal {
+  struct Encoder {
+    std::int32_t counts = 0;
+    std::int32_t read_counts() const { return counts; }
+  } encoder_;
+  struct Force {
+    std::optional<fw::ForceReading> reading;
+    std::optional<fw::ForceReading> latest() const { return reading; }
+  } force_;
+  struct Motor {
+    fw::MotorCommand last;
+    void command(const fw::MotorCommand& c) { last = c; }
+    bool driver_fault() const { return false; }
+  } motor_;
+  struct Can {
+    RingQueue* rx = nullptr;
+    RingQueue* tx = nullptr;
+    bool receive(protocol::CanFrame& f) { return rx->pop(f); }
+    bool send(const protocol::CanFrame& f) { return tx->push(f); }
+  } can_;
+  Encoder& encoder() { return encoder_; }
+  Force& force() { return force_; }
+  Motor& motor() { return motor_; }
+  Can& can() { return can_; }
+};
+
+struct Plant {
+  double angle = 0.0, speed = 0.0;
+  void advance(double torque) {
+    for (int i = 0; i < 10; ++i) {
+      speed += (torque - 0.02 * speed) / 2e-3 * 1e-4;
+      angle += speed * 1e-4;
+    }
+  }
+};
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+double percentile(std::vector<double> v, double q) {
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (const double x : v) sum += x;
+  return sum / static_cast<double>(v.size());
+}
+
+// Smallest nonzero difference between two clock reads: the resolution the per-step figures have.
+double clock_granularity_ns() {
+  double best = 1e9;
+  for (int i = 0; i < 100000; ++i) {
+    const auto a = Clock::now();
+    auto b = Clock::now();
+    while (b == a) b = Clock::now();
+    best = std::min(best, std::chrono::duration<double, std::nano>(b - a).count());
+  }
+  return best;
+}
+
+double clock_overhead_ns() {
+  std::vector<double> d(100000);
+  for (auto& x : d) {
+    const auto a = Clock::now();
+    const auto b = Clock::now();
+    x = std::chrono::duration<double, std::nano>(b - a).count();
+  }
+  return median(d);
+}
+
+struct RoleTimes {
+  std::vector<double> hsi, top;
+};
+
+// One run of the pair: the operator moves the HSI back and forth into the TOP's wall, so both directions
+// carry deadband traffic, contact happens, and every code path of step() is exercised.
+RoleTimes run_pair(std::size_t ticks) {
+  RingQueue to_hsi, to_top;
+  BenchHal hsi_hal, top_hal;
+  hsi_hal.can_ = {&to_hsi, &to_top};
+  top_hal.can_ = {&to_top, &to_hsi};
+  fw::LeverConfig hsi_cfg, top_cfg;
+  hsi_cfg.role = protocol::Role::hsi;
+  hsi_cfg.use_force_sensor = false;
+  top_cfg.role = protocol::Role::top;
+  fw::Lever<BenchHal> hsi(hsi_hal, hsi_cfg);
+  fw::Lever<BenchHal> top(top_hal, top_cfg);
+  Plant hsi_plant, top_plant;
+  const double count = 2.0 * std::numbers::pi / 16384.0;
+
+  RoleTimes times;
+  times.hsi.reserve(ticks);
+  times.top.reserve(ticks);
+  for (fw::Tick now = 1; now <= ticks + 100; ++now) {
+    if (now == 80) {
+      protocol::CommandMessage arm;
+      to_hsi.push(protocol::pack(arm, 0));
+      to_top.push(protocol::pack(arm, 0));
+    }
+    const double target = 0.25 + 0.1 * std::sin(2.0 * std::numbers::pi * 0.5 * static_cast<double>(now) * 1e-3);
+    const double wall = top_plant.angle > 0.3 ? 200.0 * (top_plant.angle - 0.3) : 0.0;
+    hsi_plant.advance(3.0 * (target - hsi_plant.angle) - 0.15 * hsi_plant.speed +
+                      (hsi_hal.motor_.last.enable ? hsi_hal.motor_.last.torque_nm : 0.0));
+    top_plant.advance((top_hal.motor_.last.enable ? top_hal.motor_.last.torque_nm : 0.0) - wall);
+    hsi_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(hsi_plant.angle / count));
+    top_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(top_plant.angle / count));
+    top_hal.force_.reading = fw::ForceReading{static_cast<std::int32_t>(std::lround(wall / 0.1 / (100.0 / 65536.0))),
+                                              now, false};
+
+    const auto t0 = Clock::now();
+    hsi.step(now);
+    const auto t1 = Clock::now();
+    top.step(now);
+    const auto t2 = Clock::now();
+    if (now > 100) {  // armed and running
+      times.hsi.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+      times.top.push_back(std::chrono::duration<double, std::nano>(t2 - t1).count());
+    }
+  }
+  if (!hsi.supervisor().armed() || !top.supervisor().armed()) {
+    fmt::print(stderr, "lever-bench-core: the pair did not stay armed (faults hsi {} top {})\n",
+               hsi.supervisor().latched(), top.supervisor().latched());
+    std::exit(1);
+  }
+  return times;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Time per Lever::step() for the HSI and TOP roles, and static memory per lever; prints JSON."};
+  app.name("lever-bench-core");
+  std::size_t ticks = 100000;
+  int repetitions = 5;
+  app.add_option("--ticks", ticks, "ticks per repetition")->check(CLI::Range(1000, 100000000))->default_str("100000");
+  app.add_option("--repetitions", repetitions, "repetitions")->check(CLI::Range(1, 100))->default_str("5");
+  CLI11_PARSE(app, argc, argv);
+
+  const double overhead = clock_overhead_ns();
+  std::vector<double> hsi_medians, top_medians, hsi_means, top_means, hsi_p99, top_p99;
+  for (int r = 0; r < repetitions; ++r) {
+    const auto times = run_pair(ticks);
+    hsi_medians.push_back(median(times.hsi) - overhead);
+    top_medians.push_back(median(times.top) - overhead);
+    hsi_means.push_back(mean(times.hsi) - overhead);
+    top_means.push_back(mean(times.top) - overhead);
+    hsi_p99.push_back(percentile(times.hsi, 0.99) - overhead);
+    top_p99.push_back(percentile(times.top, 0.99) - overhead);
+  }
+  const nlohmann::json out{
+      {"ticks_per_repetition", ticks},
+      {"repetitions", repetitions},
+      {"clock_overhead_ns", overhead},
+      {"clock_granularity_ns", clock_granularity_ns()},
+      // Per repetition: median, mean and p99 of the per-step times less the clock's cost; across repetitions
+      // the median of each. The mean is finer than the clock's granularity; the median is not.
+      {"step_ns",
+       {{"hsi",
+         {{"median", median(hsi_medians)}, {"mean", median(hsi_means)}, {"p99", median(hsi_p99)}, {"means", hsi_means}}},
+        {"top",
+         {{"median", median(top_medians)},
+          {"mean", median(top_means)},
+          {"p99", median(top_p99)},
+          {"means", top_means}}}}},
+      {"static_bytes_per_lever", sizeof(fw::Lever<BenchHal>)},
+      {"static_bytes_note", "sizeof(Lever<Hal>): all state of one lever; the HAL it refers to is the board's"},
+  };
+  fmt::print("{}\n", out.dump(2));
+  return 0;
+}
