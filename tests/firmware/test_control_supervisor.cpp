@@ -23,10 +23,10 @@ TEST_CASE("clamp_torque bounds every value, NaN included", "[firmware][control]"
 }
 
 TEST_CASE("the force display opposes the push, open and closed loop", "[firmware][control]") {
-  ForceDisplay open({0.1, 1.0, false, 0.5, 20.0, 5.0, 0.0});
+  ForceDisplay open({0.1, 1.0, false, 0.5, 20.0, 5.0, 0.0, 0.1});
   CHECK(open.update(10.0, nullptr, 0.0, 1e-3) == Approx(-1.0));  // 10 N at 0.1 m
 
-  ForceDisplay closed({0.1, 1.0, true, 0.5, 20.0, 5.0, 0.0});
+  ForceDisplay closed({0.1, 1.0, true, 0.5, 20.0, 5.0, 0.0, 0.1});
   const double own = 8.0;  // the hand feels 2 N too little
   const double first = closed.update(10.0, &own, 0.0, 1e-3);
   CHECK(first == Approx(-(10.0 + 0.5 * 2.0 + 20.0 * 2.0 * 1e-3) * 0.1));
@@ -34,6 +34,13 @@ TEST_CASE("the force display opposes the push, open and closed loop", "[firmware
   for (int i = 0; i < 10000; ++i) torque = closed.update(10.0, &own, 0.0, 1e-3);
   CHECK(closed.state().integral == Approx(5.0));  // anti-windup
   CHECK(torque == Approx(-(10.0 + 1.0 + 5.0) * 0.1));
+}
+
+TEST_CASE("the display damps only in contact", "[firmware][control]") {
+  ForceDisplay d({0.1, 1.0, false, 0.5, 20.0, 5.0, 0.3, 0.1});
+  CHECK(d.update(0.0, nullptr, 2.0, 1e-3) == 0.0);                       // free space: no drag
+  CHECK(d.update(0.05, nullptr, 2.0, 1e-3) == Approx(-0.005));           // below the threshold: none either
+  CHECK(d.update(5.0, nullptr, 2.0, 1e-3) == Approx(-0.5 - 0.3 * 2.0));  // in contact: damped wall
 }
 
 TEST_CASE("supervisor: init, arm, fault, re-arm", "[firmware][supervisor]") {

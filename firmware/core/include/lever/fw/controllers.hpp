@@ -55,7 +55,10 @@ class ForceDisplay {
     double kp = 0.5;   // per unit force error
     double ki = 20.0;  // 1/s
     double integral_limit_n = 5.0;
-    double damping_nms = 0.05;  // local viscous damping on the HSI, N m s/rad (see docs/firmware.md)
+    // Local viscous damping on the HSI, N m s/rad, applied only while a contact force is displayed: a
+    // damped virtual wall keeps the delayed contact loop from bouncing, and free motion stays free of drag.
+    double contact_damping_nms = 0.4;
+    double contact_threshold_n = 0.1;  // displayed force above which the lever counts as in contact
   };
   struct State {
     double desired_force = 0.0;
@@ -84,7 +87,8 @@ class ForceDisplay {
       if (state_.integral < -config_.integral_limit_n) state_.integral = -config_.integral_limit_n;
       force += config_.kp * state_.force_error + state_.integral;
     }
-    state_.torque = -force * config_.lever_arm_m - config_.damping_nms * velocity;
+    const bool in_contact = force > config_.contact_threshold_n || force < -config_.contact_threshold_n;
+    state_.torque = -force * config_.lever_arm_m - (in_contact ? config_.contact_damping_nms * velocity : 0.0);
     return state_.torque;
   }
 

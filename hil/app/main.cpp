@@ -1,0 +1,211 @@
+// lever-hil: the testbed in simulated time. `run` one scenario; `sweep` p for the paper's figures.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "report.hpp"
+#include "sweep.hpp"
+
+namespace {
+
+using namespace lever::hil;
+using lever::codec::Mode;
+
+constexpr int kBadInput = 2;
+
+const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
+                                                     {"free-motion", ScenarioKind::free_motion},
+                                                     {"press-hold", ScenarioKind::press_hold}};
+const std::map<std::string, Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+
+struct RunOptions {
+  SimConfig config;
+  Mode mode = Mode::deadband;
+  std::optional<Mode> mode_velocity, mode_force;
+  double p = 0.1;
+  std::optional<double> p_velocity, p_force;
+  double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0, comms_timeout_ms = 50.0;
+  std::optional<double> filter_hz_velocity, filter_hz_force;
+  std::vector<std::string> faults;
+  bool json = false;
+  std::string trace;
+};
+
+void add_run_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--scenario", o.config.scenario, "wall-tap (the paper's task), free-motion or press-hold")
+      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->default_str("wall-tap");
+  cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
+      ->check(CLI::Range(0.01, 86400.0))
+      ->default_str("20");
+  cmd.add_option("--seed", o.config.seed, "random seed (operator, gauge noise, network)")->default_str("1");
+  cmd.add_option("--mode", o.mode, "deadband or predictive, both directions")
+      ->transform(CLI::CheckedTransformer(kModes))
+      ->default_str("deadband");
+  cmd.add_option("--mode-velocity", o.mode_velocity, "mode for HSI->TOP velocity (overrides --mode)")
+      ->transform(CLI::CheckedTransformer(kModes));
+  cmd.add_option("--mode-force", o.mode_force, "mode for TOP->HSI force (overrides --mode)")
+      ->transform(CLI::CheckedTransformer(kModes));
+  cmd.add_option("--p", o.p, "deadband p for both directions (0.1 = 10 %)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0.1");
+  cmd.add_option("--p-velocity", o.p_velocity, "p for HSI->TOP velocity (overrides --p)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")->check(CLI::NonNegativeNumber);
+  cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+  cmd.add_option("--floor-force", o.floor_force, "force deadband floor, N (0: the paper's rule)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+  cmd.add_option("--filter-hz", o.filter_hz, "prefilter cut-off for both directions (0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+  cmd.add_option("--filter-hz-velocity", o.filter_hz_velocity, "prefilter cut-off for velocity (overrides --filter-hz)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+  cmd.add_option("--jitter-ms", o.config.network.jitter_ms, "network jitter (uniform, added)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+  cmd.add_option("--loss", o.config.network.loss, "datagram loss probability")
+      ->check(CLI::Range(0.0, 1.0))
+      ->default_str("0");
+  cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->default_str("50");
+  cmd.add_option("--fault", o.faults,
+                 "inject a fault: KIND@START[+DURATION][:ARG], kinds link-down, burst-loss, delay-step (:MS), "
+                 "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault (:hsi|:top); repeatable");
+  cmd.add_flag("--json", o.json, "print one JSON object");
+  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace");
+}
+
+SimConfig finish(RunOptions& o) {
+  SimConfig c = o.config;
+  c.velocity_codec = {o.mode_velocity.value_or(o.mode), o.p_velocity.value_or(o.p), o.floor_velocity,
+                      o.filter_hz_velocity.value_or(o.filter_hz)};
+  c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
+                   o.filter_hz_force.value_or(o.filter_hz)};
+  c.hsi_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
+  c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
+  for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
+
+  c.record_trace = !o.trace.empty();
+  return c;
+}
+
+void write_trace(const std::string& path, const SimResult& r) {
+  std::string out =
+      "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,hsi_torque,"
+      "top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
+  for (const auto& row : r.trace) {
+    out += fmt::format("{:.3f},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n",
+                       row.t, row.hsi_angle, row.top_angle, row.hsi_velocity, row.top_position_ref, row.contact_force,
+                       row.measured_force, row.displayed_force, row.hsi_torque, row.top_torque, row.hand_force,
+                       row.motion_sent, row.force_sent, row.hsi_state, row.top_state);
+  }
+  std::ofstream f(path);
+  f << out;
+  if (!f) throw std::runtime_error("cannot write trace " + path);
+}
+
+void print_human(const SimConfig& c, const SimResult& r) {
+  fmt::print("{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n", scenario_name(c.scenario),
+             c.duration_s, c.seed, c.velocity_codec.mode == Mode::predictive ? "predictive" : "deadband",
+             c.velocity_codec.p, c.velocity_codec.floor,
+             c.force_codec.mode == Mode::predictive ? "predictive" : "deadband", c.force_codec.p, c.force_codec.floor);
+  fmt::print("  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
+             100 * r.force_packet_rate);
+  fmt::print("  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
+             1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
+  fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
+             100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
+             r.realtime_factor);
+  for (const auto& f : r.faults) {
+    auto say = [](const FaultReport::LeverReaction& x) {
+      if (!x.fault_at_s) return std::string("no fault raised");
+      return fmt::format("fault at {:.3f} s (bits {:#x}), safe at {:.3f} s, max torque {:.2f} N m, re-armed {}",
+                         *x.fault_at_s, x.latched, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
+                         x.rearmed_at_s ? fmt::format("at {:.3f} s", *x.rearmed_at_s) : "never");
+    };
+    fmt::print("  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Hardware-in-the-loop simulator of the lever teleoperation testbed: the real firmware core, two "
+      "levers, a stiff wall, a human operator, CAN buses and an IP link, in deterministic simulated time."};
+  app.name("lever-hil");
+  app.require_subcommand(1);
+  RunOptions run_options;
+  auto* run = app.add_subcommand("run", "simulate one scenario and report packet rates, distortion and faults");
+  add_run_options(*run, run_options);
+
+  SweepOptions sweep_options;
+  auto* sweep = app.add_subcommand("sweep", "sweep p for each mode and seed; CSV and gnuplot PNG plots");
+  sweep->add_option("--scenario", sweep_options.scenario, "scenario")
+      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->default_str("wall-tap");
+  sweep->add_option("--out", sweep_options.out_dir, "output directory")->required();
+  sweep->add_option("--seeds", sweep_options.seeds, "seeds per point")->check(CLI::Range(1, 100))->default_str("3");
+  sweep->add_option("--duration", sweep_options.duration_s, "simulated seconds per run")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->default_str("20");
+  sweep->add_option("--jobs", sweep_options.jobs, "parallel runs")->check(CLI::Range(1, 64))->default_str("2");
+  sweep->add_option("--floor-velocity", sweep_options.floor_velocity, "velocity floor of the +floor variant, rad/s")
+      ->default_str("0.02");
+  sweep->add_option("--floor-force", sweep_options.floor_force, "force floor of the +floor variant, N")
+      ->default_str("0.05");
+  sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
+      ->default_str("30");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    fmt::print("{}", app.help());
+    return 0;
+  } catch (const CLI::CallForAllHelp&) {
+    fmt::print("{}", app.help("", CLI::AppFormatMode::All));
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {  // help of a subcommand
+      fmt::print("{}", e.what());
+      return 0;
+    }
+    fmt::print(stderr, "lever-hil: {}\n", e.what());
+    return kBadInput;
+  }
+
+  try {
+    if (run->parsed()) {
+      const SimConfig config = finish(run_options);
+      const SimResult result = run_simulation(config);
+      if (!run_options.trace.empty()) write_trace(run_options.trace, result);
+      if (run_options.json) {
+        fmt::print("{}\n", report_json(config, result).dump());
+      } else {
+        print_human(config, result);
+      }
+      return 0;
+    }
+    return run_sweep(sweep_options);
+  } catch (const std::invalid_argument& e) {
+    fmt::print(stderr, "lever-hil: {}\n", e.what());
+    return kBadInput;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "lever-hil: {}\n", e.what());
+    return 1;
+  }
+}

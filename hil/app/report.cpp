@@ -1,0 +1,91 @@
+#include "report.hpp"
+
+namespace lever::hil {
+namespace {
+
+nlohmann::json codec_json(const codec::Config<double>& c) {
+  return {{"mode", c.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+          {"p", c.p},
+          {"floor", c.floor},
+          {"filter_hz", c.filter_hz}};
+}
+
+nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); }
+
+nlohmann::json reaction_json(const FaultReport::LeverReaction& r, double injected) {
+  nlohmann::json j{{"fault_at_s", optional_json(r.fault_at_s)},
+                   {"latched_faults", r.latched},
+                   {"safe_at_s", optional_json(r.safe_at_s)},
+                   {"max_torque_nm", r.max_torque_nm_during},
+                   {"rearmed_at_s", optional_json(r.rearmed_at_s)}};
+  j["reaction"] = !r.fault_at_s ? "no fault raised"
+                  : r.safe_at_s ? "safe behaviour " + std::to_string(std::lround((*r.safe_at_s - injected) * 1000)) +
+                                      " ms after injection"
+                                : "never reached its safe behaviour";
+  return j;
+}
+
+}  // namespace
+
+std::string scenario_name(ScenarioKind kind) {
+  switch (kind) {
+    case ScenarioKind::wall_tap:
+      return "wall-tap";
+    case ScenarioKind::free_motion:
+      return "free-motion";
+    case ScenarioKind::press_hold:
+      return "press-hold";
+  }
+  return "?";
+}
+
+nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
+  nlohmann::json faults = nlohmann::json::array();
+  for (const auto& f : r.faults) {
+    faults.push_back(
+        {{"spec", f.spec.text},
+         {"kind", std::string(to_string(f.spec.kind))},
+         {"injected_at_s", f.spec.start_s},
+         {"ends_at_s",
+          std::isfinite(f.spec.duration_s) ? nlohmann::json(f.spec.start_s + f.spec.duration_s) : nlohmann::json()},
+         {"hsi", reaction_json(f.hsi, f.spec.start_s)},
+         {"top", reaction_json(f.top, f.spec.start_s)}});
+  }
+  return {
+      {"scenario", scenario_name(config.scenario)},
+      {"duration_s", config.duration_s},
+      {"seed", config.seed},
+      {"velocity_packet_rate", r.velocity_packet_rate},
+      {"force_packet_rate", r.force_packet_rate},
+      {"position_rmse", r.position_rmse_rad},
+      {"force_rmse", r.force_rmse_n},
+      {"force_jnd_violation", r.force_jnd_violation},
+      {"bus_load", std::max(r.bus_load_hsi, r.bus_load_top)},
+      {"bus_load_hsi", r.bus_load_hsi},
+      {"bus_load_top", r.bus_load_top},
+      {"contact_share", r.contact_share},
+      {"mean_contact_force_n", r.mean_contact_force_n},
+      {"armed_s", static_cast<double>(r.armed_ticks) * 1e-3},
+      {"frames", {{"motion", r.motion_frames}, {"force", r.force_frames}}},
+      {"network", {{"datagrams", r.network_sent}, {"lost", r.network_lost}, {"reordered", r.network_reordered}}},
+      {"sequence_gaps", {{"at_hsi", r.hsi_seq_gaps}, {"at_top", r.top_seq_gaps}}},
+      {"faults", faults},
+      {"parameters",
+       {{"velocity", codec_json(config.velocity_codec)},
+        {"force", codec_json(config.force_codec)},
+        {"delay_ms", config.network.delay_ms},
+        {"jitter_ms", config.network.jitter_ms},
+        {"loss", config.network.loss},
+        {"comms_timeout_ms", config.top_firmware.comms_timeout},
+        {"jnd", config.jnd},
+        {"jnd_absolute_n", config.jnd_absolute_n},
+        {"substeps", config.substeps},
+        {"wall_stiffness", config.wall.stiffness},
+        {"gauge_noise_n", config.gauge.noise_n},
+        {"gauge_rate_hz", config.gauge.sample_rate_hz}}},
+      {"realtime_factor", r.realtime_factor},
+      {"wall_time_s", r.wall_time_s},
+  };
+}
+
+}  // namespace lever::hil

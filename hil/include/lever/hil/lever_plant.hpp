@@ -1,0 +1,50 @@
+#pragma once
+// One lever's mechanics and motor, integrated at a fine step (semi-implicit Euler, default 10 kHz against the
+// firmware's 1 kHz) so the stiff wall and the motor lag resolve between firmware ticks.
+#include <cmath>
+
+namespace lever::hil {
+
+struct LeverPlantParams {
+  double inertia = 2.0e-3;            // kg m^2: rotor, 10 cm lever and handle
+  double viscous = 0.01;              // N m s/rad
+  double coulomb = 0.01;              // N m, bearing and brush friction
+  double coulomb_speed = 0.02;        // rad/s: below this the Coulomb term fades in smoothly (no chattering)
+  double motor_torque_limit = 1.5;    // N m: what the motor can physically give, above the firmware's 1 N m
+  double motor_time_constant = 5e-4;  // s: current loop and winding inductance as a first-order lag
+};
+
+class LeverPlant {
+ public:
+  explicit LeverPlant(const LeverPlantParams& p = {}, double angle = 0.0) : p_(p), angle_(angle) {}
+
+  // Advance by dt under the commanded motor torque and an external torque (hand or wall).
+  void advance(double commanded_torque, bool motor_enabled, double external_torque, double dt) {
+    const double target = motor_enabled ? clamp(commanded_torque, p_.motor_torque_limit) : 0.0;
+    motor_torque_ += (target - motor_torque_) * (dt / (p_.motor_time_constant + dt));
+    // Coulomb friction regularized linearly below coulomb_speed: as smooth as tanh for the integrator, and a
+    // clamp costs far less than tanh at 20 evaluations per tick.
+    const double slip = speed_ / p_.coulomb_speed;
+    const double friction = p_.viscous * speed_ + p_.coulomb * (slip > 1.0 ? 1.0 : slip < -1.0 ? -1.0 : slip);
+    speed_ += (motor_torque_ + external_torque - friction) / (p_.inertia + added_inertia_) * dt;
+    angle_ += speed_ * dt;
+  }
+
+  // A hand gripping the handle moves with it and adds its inertia.
+  void set_added_inertia(double j) { added_inertia_ = j; }
+
+  double angle() const { return angle_; }
+  double speed() const { return speed_; }
+  double motor_torque() const { return motor_torque_; }
+  const LeverPlantParams& params() const { return p_; }
+
+ private:
+  static double clamp(double v, double limit) { return v > limit ? limit : v < -limit ? -limit : v; }
+  LeverPlantParams p_;
+  double angle_ = 0.0;
+  double speed_ = 0.0;
+  double motor_torque_ = 0.0;
+  double added_inertia_ = 0.0;
+};
+
+}  // namespace lever::hil

@@ -1,0 +1,87 @@
+#pragma once
+// The testbed in simulated time: two levers (the real firmware core, Lever<SimHal>), their plants, the
+// operator, the wall, one CAN bus per site joined by two bridges over a simulated IP link, and injected
+// faults. Deterministic: the same configuration and seed give the same results, bit for bit.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lever/codec/config.hpp"
+#include "lever/fw/lever_config.hpp"
+#include "lever/hil/fault_spec.hpp"
+#include "lever/hil/human_operator.hpp"
+#include "lever/hil/lever_plant.hpp"
+#include "lever/hil/network.hpp"
+#include "lever/hil/strain_gauge_model.hpp"
+#include "lever/hil/wall.hpp"
+
+namespace lever::hil {
+
+struct SimConfig {
+  ScenarioKind scenario = ScenarioKind::wall_tap;
+  double duration_s = 20.0;  // the paper's interval length
+  std::uint64_t seed = 1;
+  codec::Config<double> velocity_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};  // HSI -> TOP
+  codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};     // TOP -> HSI
+  NetworkParams network{};
+  std::vector<FaultSpec> faults;
+  double rearm_after_s = 0.3;  // the host re-arms both levers this long after a fault's span ends
+
+  LeverPlantParams hsi_plant{};
+  LeverPlantParams top_plant{};
+  WallParams wall{};
+  StrainGaugeParams gauge{};
+  OperatorParams operator_params{};
+  fw::LeverConfig hsi_firmware = default_firmware(protocol::Role::hsi);
+  fw::LeverConfig top_firmware = default_firmware(protocol::Role::top);
+  int substeps = 10;  // physics steps per 1 ms tick
+  double bitrate = 1e6;
+  double bridge_latency_us = 100.0;  // each bridge's receive-to-send time
+  double jnd = 0.10;                 // force_jnd_violation: relative threshold (Weber fraction)...
+  double jnd_absolute_n = 0.05;      // ...but never below the absolute detection threshold for force
+  bool record_trace = false;
+
+  static fw::LeverConfig default_firmware(protocol::Role role);
+};
+
+// When a fault was injected and what each lever did about it.
+struct FaultReport {
+  FaultSpec spec;
+  struct LeverReaction {
+    std::optional<double> fault_at_s;    // entered the fault state
+    std::uint16_t latched = 0;           // fault bits latched
+    std::optional<double> safe_at_s;     // its safe behaviour was in force
+    double max_torque_nm_during = 0.0;   // from injection to re-arm
+    std::optional<double> rearmed_at_s;  // armed again
+  } hsi, top;
+};
+
+struct TraceRow {
+  double t, hsi_angle, top_angle, hsi_velocity, top_position_ref, contact_force, measured_force, displayed_force,
+      hsi_torque, top_torque, hand_force;
+  int motion_sent, force_sent, hsi_state, top_state;
+};
+
+struct SimResult {
+  double velocity_packet_rate = 0.0;  // HSI data frames per tick while armed
+  double force_packet_rate = 0.0;     // TOP data frames per tick while armed
+  double position_rmse_rad = 0.0;     // TOP angle against HSI angle
+  double force_rmse_n = 0.0;          // displayed (HSI) against measured (TOP gauge)
+  double force_jnd_violation = 0.0;   // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
+  double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
+  double mean_contact_force_n = 0.0;  // while in contact
+  double bus_load_hsi = 0.0, bus_load_top = 0.0;
+  std::uint64_t armed_ticks = 0;
+  std::uint64_t motion_frames = 0, force_frames = 0;
+  std::uint64_t network_sent = 0, network_lost = 0, network_reordered = 0;
+  std::uint64_t hsi_seq_gaps = 0, top_seq_gaps = 0;
+  double wall_time_s = 0.0;
+  double realtime_factor = 0.0;
+  std::vector<FaultReport> faults;
+  std::vector<TraceRow> trace;
+};
+
+SimResult run_simulation(const SimConfig& config);
+
+}  // namespace lever::hil

@@ -1,0 +1,100 @@
+#include "lever/hil/human_operator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace lever::hil {
+namespace {
+
+// Minimum-jerk blend (Flash and Hogan 1985): position and its time derivative factor.
+double minimum_jerk(double tau) {
+  tau = std::clamp(tau, 0.0, 1.0);
+  return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+}
+double minimum_jerk_rate(double tau) {
+  if (tau <= 0.0 || tau >= 1.0) return 0.0;
+  return 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau);
+}
+
+}  // namespace
+
+HumanOperator::HumanOperator(const OperatorParams& p, ScenarioKind scenario, double wall_angle, double start_angle,
+                             std::uint64_t seed)
+    : p_(p), scenario_(scenario), wall_(wall_angle), rng_(seed), intent_angle_(start_angle) {
+  move_from_ = start_angle;
+  start(next_segment(), 0.0);
+}
+
+void HumanOperator::start(const Segment& s, double now_s) {
+  segment_ = s;
+  segment_start_s_ = now_s;
+  move_from_ = intent_angle_;
+}
+
+void HumanOperator::update(fw::Tick now, double felt_force) {
+  const double now_s = static_cast<double>(now) * 1e-3;
+  felt_history_[felt_head_] = felt_force;
+  felt_head_ = (felt_head_ + 1) % felt_history_.size();
+  while (now_s - segment_start_s_ >= segment_.duration_s) start(next_segment(), segment_start_s_ + segment_.duration_s);
+
+  const double elapsed = now_s - segment_start_s_;
+  if (segment_.kind == Segment::Kind::move) {
+    const double tau = elapsed / segment_.move_s;
+    intent_angle_ = move_from_ + (segment_.target_angle - move_from_) * minimum_jerk(tau);
+    intent_speed_ = (segment_.target_angle - move_from_) * minimum_jerk_rate(tau) / segment_.move_s;
+    return;
+  }
+  // Press: push the intent further until the force felt (as it was a reaction time ago) reaches the target.
+  // Gain: felt force changes by stiffness/arm per radian of intent against a rigid wall, so this gain gives a
+  // first-order force loop at force_bandwidth_hz.
+  const std::size_t delay = static_cast<std::size_t>(p_.reaction_delay_ticks);
+  const double felt_then = felt_history_[(felt_head_ + felt_history_.size() - 1 - delay) % felt_history_.size()];
+  const double gain = 2.0 * std::numbers::pi * p_.force_bandwidth_hz * p_.arm / p_.stiffness;
+  intent_speed_ = gain * (segment_.target_force - felt_then);
+  intent_angle_ += intent_speed_ * 1e-3;
+}
+
+// The scenarios' scripts. Ranges describe what people do on a desk-top lever; docs/hil-model.md says why.
+Segment HumanOperator::next_segment() {
+  auto move = [](double target, double move_s, double dwell_s) {
+    return Segment{Segment::Kind::move, target, 0.0, move_s + dwell_s, move_s};
+  };
+  switch (scenario_) {
+    case ScenarioKind::free_motion:
+      // Reaching back and forth, never as far as the wall.
+      return move(rng_.uniform(0.0, wall_ - 0.08), rng_.uniform(0.3, 1.0), rng_.uniform(0.0, 0.3));
+    case ScenarioKind::press_hold:
+      switch (script_step_++ % 3) {
+        case 0:
+          return move(wall_ - 0.02, rng_.uniform(0.4, 0.7), 0.1);
+        case 1:
+          return Segment{Segment::Kind::press, 0.0, rng_.uniform(3.0, 6.0), rng_.uniform(2.0, 4.0), 0.0};
+        default:
+          return move(rng_.uniform(0.05, 0.15), rng_.uniform(0.3, 0.6), rng_.uniform(0.5, 1.0));
+      }
+    case ScenarioKind::wall_tap:
+      // The paper's 1-DoF task: feel the wall by tapping it and pressing against it.
+      if (taps_left_ > 0) {
+        // A tap is a quick thrust past the surface and back: the wall stops the lever, the hand rebounds.
+        const bool thrust = taps_left_ % 2 == 0;
+        --taps_left_;
+        return thrust ? move(wall_ + rng_.uniform(0.02, 0.05), rng_.uniform(0.10, 0.15), 0.0)
+                      : move(wall_ - rng_.uniform(0.03, 0.08), rng_.uniform(0.12, 0.2), rng_.uniform(0.0, 0.1));
+      }
+      switch (script_step_++ % 4) {
+        case 0:
+          return move(rng_.uniform(0.05, 0.2), rng_.uniform(0.4, 0.8), rng_.uniform(0.1, 0.4));
+        case 1:
+          taps_left_ = 2 * static_cast<int>(1 + rng_.next() % 3) - 1;  // this thrust plus 0-2 more taps
+          return move(wall_ + rng_.uniform(0.02, 0.05), rng_.uniform(0.10, 0.15), 0.0);
+        case 2:
+          return move(wall_ - 0.02, 0.2, 0.0);
+        default:
+          return Segment{Segment::Kind::press, 0.0, rng_.uniform(2.0, 8.0), rng_.uniform(0.6, 1.5), 0.0};
+      }
+  }
+  return move(0.1, 1.0, 0.0);
+}
+
+}  // namespace lever::hil
