@@ -68,12 +68,23 @@ TEST_CASE("deadband silence keeps the receiver exact; the refresh bounds it", "[
       last_sent = now;
       ++sent;
     }
-    REQUIRE(link.rx.value_at(now).has_value());
-    CHECK(*link.rx.value_at(now) == Approx(5.0).margin(1e-5));
+    REQUIRE(link.rx.value_at(now, 1000).has_value());
+    CHECK(*link.rx.value_at(now, 1000) == Approx(5.0).margin(1e-5));
   }
   CHECK(longest_silence == 100u);
   CHECK(sent == 20);
   CHECK(link.rx.sequence().missing() == 0u);
+}
+
+TEST_CASE("a stream that stopped is stale, not held forever", "[firmware][link]") {
+  Link link({Mode::predictive, 0.1, 0.0, 0.0}, 100);
+  for (Tick now = 0; now < 10; ++now) {
+    const auto out = link.tx.offer(now, static_cast<double>(now));  // a ramp
+    if (out.send) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code);
+  }
+  const Tick last = link.rx.last_arrival();  // the predictor needed only the first samples of the ramp
+  CHECK(link.rx.value_at(last + 200, 200).has_value());
+  CHECK_FALSE(link.rx.value_at(last + 201, 200).has_value());  // no extrapolating a sender that went quiet
 }
 
 TEST_CASE("a lost update heals at the next refresh, and the gap is counted", "[firmware][link]") {
@@ -84,7 +95,7 @@ TEST_CASE("a lost update heals at the next refresh, and the gap is counted", "[f
     const auto out = link.tx.offer(now, force);
     const bool lose = now == 50;  // exactly the frame carrying the step
     if (out.send && !lose) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code);
-    if (now > 50 && healed_at == 0 && std::fabs(*link.rx.value_at(now) - 3.0) < 1e-4) healed_at = now;
+    if (now > 50 && healed_at == 0 && std::fabs(*link.rx.value_at(now, 1000) - 3.0) < 1e-4) healed_at = now;
   }
   CHECK(healed_at == 150u);  // the refresh 100 ticks after the lost frame
   CHECK(link.rx.sequence().missing() == 1u);
@@ -120,7 +131,7 @@ TEST_CASE("changing parameters mid-stream keeps both ends bit-identical", "[firm
       receiver_mode = out.mode;
       REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code));
     }
-    const auto shown = link.rx.value_at(now);
+    const auto shown = link.rx.value_at(now, 1000);
     REQUIRE(shown.has_value());
     const double believed = link.tx.codec_sender().model().at(static_cast<double>(now))[0];
     REQUIRE(std::memcmp(&believed, &*shown, sizeof(double)) == 0);

@@ -100,8 +100,11 @@ class DataReceiver {
     return true;
   }
 
-  // The reconstructed value at local tick `now`; nothing before the first sample.
-  std::optional<double> value_at(Tick now) const noexcept {
+  // The reconstructed value at local tick `now`; nothing before the first sample, and nothing once the
+  // newest sample is older than max_age: a sender that stopped (disarmed, faulted) while its heartbeats go on
+  // must not leave the receiver holding, or worse extrapolating, its last value forever.
+  std::optional<double> value_at(Tick now, Tick max_age) const noexcept {
+    if (now - arrival_ > max_age) return std::nullopt;
     const auto v = receiver_.reconstruct(static_cast<double>(newest_tick_ + (now - arrival_)));
     if (!v) return std::nullopt;
     return (*v)[0];

@@ -123,6 +123,8 @@ class Lever {
   static constexpr WireQuantizer<std::int16_t> position_quantizer() noexcept { return {protocol::kPositionLsbRad}; }
 
   bool is_hsi() const noexcept { return config_.role == protocol::Role::hsi; }
+  // Two refresh periods without data: the sender has stopped, not merely stayed inside its deadband.
+  Tick stale_after() const noexcept { return 2 * config_.refresh_period; }
   bool uses_gauge() const noexcept { return !is_hsi() || (config_.use_force_sensor && config_.display.closed_loop); }
 
   void read_sensors(Tick now, double dt) noexcept {
@@ -260,13 +262,14 @@ class Lever {
     if (!supervisor_.armed()) return 0.0;
 
     if (is_hsi()) {
-      telemetry_.remote = force_rx_.value_at(now);
+      telemetry_.remote = force_rx_.value_at(now, stale_after());
       const double remote_force = telemetry_.remote.value_or(0.0);
       const double* own = telemetry_.force_n ? &*telemetry_.force_n : nullptr;
       return display_.update(remote_force, own, telemetry_.velocity_rad_s, dt);
     }
     if (have_motion_) {
-      telemetry_.remote = motion_rx_.value_at(now);
+      // A stale stream leaves the reference where it was: the TOP holds instead of integrating old motion.
+      telemetry_.remote = motion_rx_.value_at(now, stale_after());
       telemetry_.velocity_ref_rad_s = telemetry_.remote.value_or(0.0);
       if (now != motion_rx_.last_arrival()) telemetry_.position_ref_rad += telemetry_.velocity_ref_rad_s * dt;
     }
