@@ -1,0 +1,200 @@
+// The HIL's models on their own: bus timing and arbitration, the network link, encoder, gauge, operator.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "lever/fw/quadrature_decoder.hpp"
+#include "lever/hil/can_bus.hpp"
+#include "lever/hil/human_operator.hpp"
+#include "lever/hil/network.hpp"
+#include "lever/hil/quadrature_encoder.hpp"
+#include "lever/hil/strain_gauge_model.hpp"
+#include "lever/hil/wall.hpp"
+
+using namespace lever;
+using namespace lever::hil;
+
+namespace {
+protocol::CanFrame frame(std::uint32_t id) { return {id, 8, {}}; }
+}  // namespace
+
+TEST_CASE("frame length with worst-case stuffing", "[hil][bus]") {
+  CHECK(frame_bits_worst_case(0) == 55);   // 47 + 8 stuff bits
+  CHECK(frame_bits_worst_case(8) == 135);  // 111 + 24
+}
+
+TEST_CASE("the bus sends the lowest id first and takes 135 us per 8-byte frame at 1 Mbit/s", "[hil][bus]") {
+  CanBus bus(1e6);
+  const auto a = bus.add_node(), b = bus.add_node(), listener = bus.add_node();
+  REQUIRE(bus.send(a, frame(0x700), 0));
+  REQUIRE(bus.send(b, frame(0x100), 0));
+  bus.advance_to(134'000);
+  protocol::CanFrame got;
+  CHECK_FALSE(bus.receive(listener, got));  // the first frame is still on the wire
+  bus.advance_to(135'000);
+  REQUIRE(bus.receive(listener, got));
+  CHECK(got.id == 0x100u);  // won arbitration
+  bus.advance_to(270'000);
+  REQUIRE(bus.receive(listener, got));
+  CHECK(got.id == 0x700u);
+  CHECK(bus.load() == Approx(1.0));  // busy the whole time so far
+  bus.advance_to(540'000);
+  CHECK(bus.load() == Approx(0.5));
+  int own = 0, others = 0;  // a node hears the others' frames, never its own
+  while (bus.receive(a, got)) (got.id == 0x700u ? own : others)++;
+  CHECK(own == 0);
+  CHECK(others == 1);
+}
+
+TEST_CASE("a frame ready during another's transmission waits for the bus", "[hil][bus]") {
+  CanBus bus(1e6);
+  const auto a = bus.add_node(), b = bus.add_node(), listener = bus.add_node();
+  bus.send(a, frame(0x700), 0);
+  bus.send(b, frame(0x080), 10'000);  // higher priority, but the bus is busy
+  bus.advance_to(1'000'000);
+  protocol::CanFrame first, second;
+  REQUIRE(bus.receive(listener, first));
+  REQUIRE(bus.receive(listener, second));
+  CHECK(first.id == 0x700u);
+  CHECK(second.id == 0x080u);
+}
+
+TEST_CASE("a bus-off node neither sends nor receives", "[hil][bus]") {
+  CanBus bus;
+  const auto a = bus.add_node(), b = bus.add_node();
+  bus.set_bus_off(a, true);
+  CHECK_FALSE(bus.send(a, frame(0x100), 0));
+  bus.send(b, frame(0x110), 0);
+  bus.advance_to(1'000'000);
+  protocol::CanFrame got;
+  CHECK_FALSE(bus.receive(a, got));
+  CHECK(bus.stats(a).tx_refused == 1u);
+}
+
+TEST_CASE("the link delays, loses and reorders as configured, reproducibly", "[hil][network]") {
+  auto run = [](const NetworkParams& p, std::uint64_t seed) {
+    NetworkLink link(p, seed);
+    std::vector<std::uint32_t> arrived;
+    for (int i = 0; i < 10000; ++i) link.send(frame(static_cast<std::uint32_t>(i % 0x7FF)), i * 100'000LL);
+    protocol::CanFrame f;
+    for (Nanos t = 0; t < 2'000'000'000LL; t += 100'000)
+      while (link.pop_arrived(t, f)) arrived.push_back(f.id);
+    return std::make_pair(link.stats(), arrived);
+  };
+  const auto [lossy, lossy_ids] = run({5.0, 0.0, 0.1, true}, 1);
+  CHECK(lossy.lost == Approx(1000).margin(120));
+  CHECK(lossy.reordered == 0u);
+  const auto [jittery, jittery_ids] = run({5.0, 2.0, 0.0, true}, 1);
+  CHECK(jittery.reordered > 100u);  // 2 ms jitter on datagrams 0.1 ms apart
+  const auto [fifo, fifo_ids] = run({5.0, 2.0, 0.0, false}, 1);
+  CHECK(fifo.reordered == 0u);
+  CHECK(run({5.0, 2.0, 0.1, true}, 7).second == run({5.0, 2.0, 0.1, true}, 7).second);
+  CHECK(run({5.0, 2.0, 0.1, true}, 7).second != run({5.0, 2.0, 0.1, true}, 8).second);
+}
+
+TEST_CASE("a datagram arrives after the configured delay", "[hil][network]") {
+  NetworkLink link({20.0, 0.0, 0.0, true}, 1);
+  link.send(frame(0x100), 1'000'000);
+  protocol::CanFrame f;
+  CHECK_FALSE(link.pop_arrived(20'999'999, f));
+  CHECK(link.pop_arrived(21'000'000, f));
+  link.set_down(true);
+  link.send(frame(0x100), 30'000'000);
+  CHECK_FALSE(link.pop_arrived(100'000'000, f));
+}
+
+TEST_CASE("the encoder's edges decode back to its count; glitches are illegal transitions", "[hil][encoder]") {
+  QuadratureEncoder encoder(16384.0, 0.0);
+  fw::QuadratureDecoder decoder;
+  decoder.reset(encoder.levels());
+  fw::AbState edges[1024];
+  for (double angle = 0.0; angle < 1.0; angle += 0.003) {
+    encoder.track(angle);
+    const auto n = encoder.drain_edges(edges, 1024);
+    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  }
+  for (double angle = 1.0; angle > -0.5; angle -= 0.003) {
+    encoder.track(angle);
+    const auto n = encoder.drain_edges(edges, 1024);
+    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  }
+  encoder.track(-0.5);
+  for (std::size_t n; (n = encoder.drain_edges(edges, 1024)) > 0;)
+    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  CHECK(decoder.counts() == encoder.count());
+  CHECK(encoder.overflowed() == 0u);
+  CHECK(decoder.counts() == static_cast<std::int32_t>(std::floor(-0.5 / (2 * std::numbers::pi / 16384))));
+  CHECK(decoder.illegal_transitions() == 0u);
+  encoder.glitch();
+  for (std::size_t n; (n = encoder.drain_edges(edges, 1024)) > 0;)
+    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  CHECK(decoder.illegal_transitions() == 2u);
+}
+
+TEST_CASE("edges beyond the queue's capacity are lost and counted, like a kernel event FIFO", "[hil][encoder]") {
+  QuadratureEncoder encoder(16384.0, 0.0);
+  encoder.track(1.0);  // 2607 edges at once
+  CHECK(encoder.overflowed() == 2607u - 1024u);
+}
+
+TEST_CASE("the gauge samples at its own rate, with noise of the configured size", "[hil][gauge]") {
+  StrainGaugeParams p;
+  p.sample_rate_hz = 500.0;
+  p.noise_n = 0.02;
+  StrainGaugeModel gauge(p, 3);
+  int fresh = 0;
+  fw::Tick last = 0;
+  double sum = 0, sum_sq = 0;
+  for (fw::Tick now = 1; now <= 10000; ++now) {
+    gauge.update(2.0, now);
+    const auto r = gauge.latest();
+    REQUIRE(r);
+    if (r->tick != last) {
+      ++fresh;
+      last = r->tick;
+      const double f = r->raw * p.newton_per_count;
+      sum += f;
+      sum_sq += f * f;
+    }
+  }
+  CHECK(fresh == Approx(5000).margin(2));
+  const double mean = sum / fresh;
+  CHECK(mean == Approx(2.0).margin(0.002));
+  CHECK(std::sqrt(sum_sq / fresh - mean * mean) == Approx(0.02).epsilon(0.05));
+  gauge.set_saturated(true);
+  gauge.update(2.0, 10002);
+  CHECK(gauge.latest()->raw == 32767);
+}
+
+TEST_CASE("the wall pushes, never pulls", "[hil][wall]") {
+  const WallParams w{0.3, 200.0, 0.3};
+  CHECK(wall_torque(w, 0.29, 1.0) == 0.0);
+  CHECK(wall_torque(w, 0.31, 0.0) == Approx(-2.0));
+  CHECK(wall_torque(w, 0.3001, -5.0) == 0.0);  // leaving fast: the damper would pull, the wall does not
+}
+
+TEST_CASE("the operator's intent follows the scenario", "[hil][operator]") {
+  SECTION("free motion stays short of the wall") {
+    HumanOperator op({}, ScenarioKind::free_motion, 0.3, 0.1, 1);
+    double furthest = 0.0;
+    for (fw::Tick t = 1; t < 20000; ++t) {
+      op.update(t, 0.0);
+      furthest = std::max(furthest, op.intent_angle());
+    }
+    CHECK(furthest < 0.3);
+  }
+  SECTION("a press pushes the intent on until the felt force reaches the target") {
+    HumanOperator op({}, ScenarioKind::press_hold, 0.3, 0.1, 1);
+    fw::Tick t = 1;
+    while (op.segment().kind != Segment::Kind::press) op.update(t++, 0.0);
+    const double target = op.segment().target_force;
+    // A rigid wall at 0.3 rad: the felt force is the hand's spring force against it.
+    double felt = 0.0;
+    for (int i = 0; i < 1500; ++i) {
+      op.update(t++, felt);
+      felt = std::max(0.0, op.hand_force(0.3, 0.0));
+    }
+    CHECK(op.segment().kind == Segment::Kind::press);
+    CHECK(felt == Approx(target).epsilon(0.05));
+  }
+}
