@@ -3,9 +3,9 @@
 //
 // Each step is timed on its own with steady_clock; the clock's own cost (the median of back-to-back reads)
 // is reported and subtracted. Several repetitions; the figure of merit is the median across them.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -154,8 +154,8 @@ RoleTimes run_pair(std::size_t ticks) {
     top_plant.advance((top_hal.motor_.last.enable ? top_hal.motor_.last.torque_nm : 0.0) - wall);
     hsi_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(hsi_plant.angle / count));
     top_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(top_plant.angle / count));
-    top_hal.force_.reading = fw::ForceReading{static_cast<std::int32_t>(std::lround(wall / 0.1 / (100.0 / 65536.0))),
-                                              now, false};
+    top_hal.force_.reading =
+        fw::ForceReading{static_cast<std::int32_t>(std::lround(wall / 0.1 / (100.0 / 65536.0))), now, false};
 
     const auto t0 = Clock::now();
     hsi.step(now);
@@ -206,7 +206,10 @@ int main(int argc, char** argv) {
       // the median of each. The mean is finer than the clock's granularity; the median is not.
       {"step_ns",
        {{"hsi",
-         {{"median", median(hsi_medians)}, {"mean", median(hsi_means)}, {"p99", median(hsi_p99)}, {"means", hsi_means}}},
+         {{"median", median(hsi_medians)},
+          {"mean", median(hsi_means)},
+          {"p99", median(hsi_p99)},
+          {"means", hsi_means}}},
         {"top",
          {{"median", median(top_medians)},
           {"mean", median(top_means)},

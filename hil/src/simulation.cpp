@@ -128,6 +128,8 @@ SimResult run_simulation(const SimConfig& config) {
   HumanOperator op(config.operator_params, config.scenario, config.wall.angle, 0.1, config.seed * 4 + 5);
   hsi->plant.set_added_inertia(config.operator_params.hand_inertia);
 
+  // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
+  const bool hsi_gauge_used = hsi_fw.use_force_sensor && hsi_fw.display.closed_loop;
   SimResult result;
   for (const auto& f : config.faults) result.faults.push_back({f, {}, {}});
   const double top_arm = top_fw.display.lever_arm_m;
@@ -205,7 +207,7 @@ SimResult run_simulation(const SimConfig& config) {
     }
 
     top->hal.gauge_.update(contact, tick);
-    hsi->hal.gauge_.update(hand, tick);
+    if (hsi_gauge_used) hsi->hal.gauge_.update(hand, tick);
 
     // Frames: the link, then both buses up to now, then what the bridges picked up goes to the link.
     bridge_hsi.pump(now);

@@ -20,18 +20,22 @@ class LeverPlant {
 
   // Advance by dt under the commanded motor torque and an external torque (hand or wall).
   void advance(double commanded_torque, bool motor_enabled, double external_torque, double dt) {
+    if (dt != step_) prepare(dt);  // the step is constant in a run: the divisions happen once
     const double target = motor_enabled ? clamp(commanded_torque, p_.motor_torque_limit) : 0.0;
-    motor_torque_ += (target - motor_torque_) * (dt / (p_.motor_time_constant + dt));
+    motor_torque_ += (target - motor_torque_) * motor_blend_;
     // Coulomb friction regularized linearly below coulomb_speed: as smooth as tanh for the integrator, and a
     // clamp costs far less than tanh at 20 evaluations per tick.
     const double slip = speed_ / p_.coulomb_speed;
     const double friction = p_.viscous * speed_ + p_.coulomb * (slip > 1.0 ? 1.0 : slip < -1.0 ? -1.0 : slip);
-    speed_ += (motor_torque_ + external_torque - friction) / (p_.inertia + added_inertia_) * dt;
+    speed_ += (motor_torque_ + external_torque - friction) * dt_over_inertia_;
     angle_ += speed_ * dt;
   }
 
   // A hand gripping the handle moves with it and adds its inertia.
-  void set_added_inertia(double j) { added_inertia_ = j; }
+  void set_added_inertia(double j) {
+    added_inertia_ = j;
+    step_ = 0.0;
+  }
 
   double angle() const { return angle_; }
   double speed() const { return speed_; }
@@ -40,11 +44,19 @@ class LeverPlant {
 
  private:
   static double clamp(double v, double limit) { return v > limit ? limit : v < -limit ? -limit : v; }
+  void prepare(double dt) {
+    step_ = dt;
+    motor_blend_ = dt / (p_.motor_time_constant + dt);
+    dt_over_inertia_ = dt / (p_.inertia + added_inertia_);
+  }
   LeverPlantParams p_;
   double angle_ = 0.0;
   double speed_ = 0.0;
   double motor_torque_ = 0.0;
   double added_inertia_ = 0.0;
+  double step_ = 0.0;
+  double motor_blend_ = 0.0;
+  double dt_over_inertia_ = 0.0;
 };
 
 }  // namespace lever::hil

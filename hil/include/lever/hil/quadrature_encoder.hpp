@@ -14,7 +14,7 @@ namespace lever::hil {
 class QuadratureEncoder {
  public:
   explicit QuadratureEncoder(double counts_per_rev = 16384.0, double angle = 0.0)
-      : radians_per_count_(2.0 * std::numbers::pi / counts_per_rev), count_(count_at(angle)) {}
+      : counts_per_radian_(counts_per_rev / (2.0 * std::numbers::pi)), count_(count_at(angle)) {}
 
   // The lever moved to `angle`: one edge per count crossed, in order.
   void track(double angle) {
@@ -53,7 +53,7 @@ class QuadratureEncoder {
     return kGray[((count % 4) + 4) % 4];
   }
   std::int64_t count_at(double angle) const {
-    return static_cast<std::int64_t>(std::floor(angle / radians_per_count_));
+    return static_cast<std::int64_t>(std::floor(angle * counts_per_radian_));
   }
   void push(fw::AbState s) {
     if (size_ == edges_.size()) {
@@ -63,7 +63,7 @@ class QuadratureEncoder {
     edges_[(head_ + size_++) % edges_.size()] = s;
   }
 
-  double radians_per_count_;
+  double counts_per_radian_;
   std::int64_t count_;
   std::array<fw::AbState, 1024> edges_{};
   std::size_t head_ = 0, size_ = 0;

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# lever-hil as a user runs it: help, argument errors, byte-identical JSON for one seed, sweep outputs.
+# usage: lever_hil_cli.sh path/to/lever-hil
+set -uo pipefail
+hil=$1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0 failed=0
+check() {
+  local name=$1; shift
+  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
+}
+expect_bad() {  # NAME EXPECTED_MESSAGE ARGS...
+  local name=$1 expected=$2; shift 2
+  "$hil" "$@" >"$work/out" 2>"$work/err"
+  local code=$?
+  check "$name: exit code 2 (got $code)" test "$code" -eq 2
+  check "$name: says '$expected'" grep -qF -- "$expected" "$work/err"
+}
+
+"$hil" --help >"$work/help"; check "--help exits 0" test $? -eq 0
+check "--help lists run and sweep" grep -q sweep "$work/help"
+"$hil" run --help >"$work/help"; check "run --help exits 0" test $? -eq 0
+check "run --help documents --fault" grep -q -- "--fault" "$work/help"
+
+expect_bad "no subcommand" "subcommand"
+expect_bad "unknown scenario" "--scenario" run --scenario moonwalk
+expect_bad "negative p" "--p" run --p -1
+expect_bad "bad fault kind" "unknown kind 'meteor'" run --fault meteor@1
+expect_bad "bad fault time" "start 'soon'" run --fault link-down@soon
+
+args=(run --scenario wall-tap --duration 2 --seed 7 --delay-ms 10 --jitter-ms 3 --loss 0.05 --fault link-down@1+0.2 --json)
+"$hil" "${args[@]}" >"$work/a.json"; check "run --json exits 0" test $? -eq 0
+"$hil" "${args[@]}" >"$work/b.json"
+strip='del(.realtime_factor, .wall_time_s)'
+check "same seed, same JSON byte for byte (but timings)" diff <(jq -cS "$strip" "$work/a.json") <(jq -cS "$strip" "$work/b.json")
+check "the report has the promised fields" jq -e 'has("velocity_packet_rate") and has("force_packet_rate") and
+  has("position_rmse") and has("force_rmse") and has("force_jnd_violation") and has("bus_load") and
+  has("realtime_factor") and has("faults") and has("parameters")' "$work/a.json"
+check "the fault is reported with the supervisor's reaction" \
+  jq -e '.faults[0].kind == "link-down" and (.faults[0].top.fault_at_s >= 1) and (.faults[0].top.safe_at_s != null)' "$work/a.json"
+"$hil" run --duration 2 --seed 8 --json | jq -cS "$strip" >"$work/c.json"
+check "another seed, another run" bash -c "! diff -q <(jq -cS '$strip' '$work/a.json') '$work/c.json' >/dev/null"
+
+"$hil" run --duration 1 --trace "$work/trace.csv" >/dev/null
+check "trace has a header and one row per tick" test "$(wc -l <"$work/trace.csv")" -eq 1001
+
+"$hil" sweep --scenario wall-tap --out "$work/sweep" --seeds 1 --duration 0.5 >"$work/sweep.out" 2>"$work/sweep.err"
+check "sweep exits 0" test $? -eq 0
+check "sweep printed progress" grep -q "sweep: 45/45 runs" "$work/sweep.err"
+for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png distortion.png position_error.png; do
+  check "sweep wrote $f" test -s "$work/sweep/$f"
+done
+check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
+
+echo "lever-hil cli: $passed passed, $failed failed"
+[[ $failed -eq 0 ]]
