@@ -32,6 +32,9 @@ bool SocketCan::open(const std::string& interface) {
   const int on = 1;
   // Kernel receive timestamps make the recorded log and the latency figures independent of our scheduling.
   ::setsockopt(fd_.get(), SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on);
+  // The kernel's count of frames dropped for a full receive queue rides on every read: losses become visible.
+  ::setsockopt(fd_.get(), SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+  kernel_drops_ = 0;
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = ifr.ifr_ifindex;
@@ -59,7 +62,7 @@ IoStatus SocketCan::classify(int err) {
 IoStatus SocketCan::read(protocol::CanFrame& frame, std::int64_t& timestamp_us) {
   can_frame raw{};
   iovec iov{&raw, sizeof raw};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval))];
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))];
   msghdr msg{};
   msg.msg_iov = &iov;
   msg.msg_iovlen = 1;
@@ -81,6 +84,8 @@ IoStatus SocketCan::read(protocol::CanFrame& frame, std::int64_t& timestamp_us) 
       timeval tv;
       std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
       timestamp_us = static_cast<std::int64_t>(tv.tv_sec) * 1'000'000 + tv.tv_usec;
+    } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+      std::memcpy(&kernel_drops_, CMSG_DATA(c), sizeof kernel_drops_);
     }
   }
   return IoStatus::ok;

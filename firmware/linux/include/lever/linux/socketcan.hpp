@@ -32,6 +32,8 @@ class SocketCan {
   IoStatus read(protocol::CanFrame& frame, std::int64_t& timestamp_us);
   IoStatus write(const protocol::CanFrame& frame);
 
+  // Frames the kernel dropped because this socket's receive queue was full (SO_RXQ_OVFL), since open().
+  std::uint32_t kernel_drops() const { return kernel_drops_; }
   int last_errno() const { return errno_; }
   const std::string& error_text() const { return error_; }
 
@@ -40,6 +42,7 @@ class SocketCan {
   UniqueFd fd_;
   std::string interface_;
   int errno_ = 0;
+  std::uint32_t kernel_drops_ = 0;
   std::string error_;
 };
 
