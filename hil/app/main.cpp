@@ -1,13 +1,13 @@
 // lever-hil: the testbed in simulated time. `run` one scenario; `sweep` p for the paper's figures.
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "lever/cli/parse.hpp"
 #include "report.hpp"
 #include "sweep.hpp"
 
@@ -16,7 +16,7 @@ namespace {
 using namespace lever::hil;
 using lever::codec::Mode;
 
-constexpr int kBadInput = 2;
+constexpr int kBadInput = lever::cli::kBadInput;
 
 const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
                                                      {"free-motion", ScenarioKind::free_motion},
@@ -171,22 +171,7 @@ int main(int argc, char** argv) {
   sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
       ->default_str("30");
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    fmt::print("{}", app.help());
-    return 0;
-  } catch (const CLI::CallForAllHelp&) {
-    fmt::print("{}", app.help("", CLI::AppFormatMode::All));
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) {  // help of a subcommand
-      fmt::print("{}", e.what());
-      return 0;
-    }
-    fmt::print(stderr, "lever-hil: {}\n", e.what());
-    return kBadInput;
-  }
+  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
 
   try {
     if (run->parsed()) {

@@ -4,7 +4,6 @@
 #include <sodium.h>
 #include <sys/mman.h>
 
-#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -13,12 +12,13 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "key.hpp"
+#include "lever/cli/parse.hpp"
 #include "relay.hpp"
 
 namespace {
 
 using namespace lever::bridge;
-constexpr int kBadInput = 2;
+constexpr int kBadInput = lever::cli::kBadInput;
 
 int fail(int code, const std::string& message) {
   fmt::print(stderr, "lever-bridge: {}\n", message);
@@ -64,18 +64,7 @@ int main(int argc, char** argv) {
   auto* keygen = app.add_subcommand("keygen", "print a new random key in the key file format");
   app.require_subcommand(0, 1);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    fmt::print("{}", app.help());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) {
-      fmt::print("{}", app.help());
-      return 0;
-    }
-    return fail(kBadInput, e.what());
-  }
+  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
   if (sodium_init() < 0) return fail(1, "libsodium failed to initialize");
   if (keygen->parsed()) {
     fmt::print("{}", format_key(generate_key()));

@@ -1,19 +1,19 @@
 // lever-codec: runs the perceptual deadband codec on a recorded trace, or generates example traces.
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "codec_run.hpp"
+#include "lever/cli/parse.hpp"
 #include "trace_csv.hpp"
 #include "trace_generator.hpp"
 
 namespace {
 
-constexpr int kBadInput = 2;
+constexpr int kBadInput = lever::cli::kBadInput;
 
 int fail(const std::string& message) {
   fmt::print(stderr, "lever-codec: {}\n", message);
@@ -68,17 +68,7 @@ int main(int argc, char** argv) {
   generate->add_option("--out", gen_out, "output trace CSV")->required();
   app.require_subcommand(0, 1);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    fmt::print("{}", app.help());
-    return 0;
-  } catch (const CLI::CallForAllHelp&) {
-    fmt::print("{}", app.help("", CLI::AppFormatMode::All));
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    return fail(e.what());
-  }
+  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
 
   try {
     if (generate->parsed()) {

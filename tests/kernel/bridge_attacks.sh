@@ -4,26 +4,17 @@
 # reach the bus. Each attack uses its own CAN id (0x101 + kind), so candump shows what got through.
 # usage: bridge_attacks.sh BIN_DIR
 set -uo pipefail
-bin=$1
-out=${LEVER_RIG_OUT:-$(mktemp -d)}
-work=$(mktemp -d)
-passed=0 failed=0
-check() {
-  local name=$1; shift
-  if "$@"; then passed=$((passed + 1)); echo "ok: $name"; else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
-}
-"$bin/lever-bridge" keygen >"$work/site.key"
-chmod 600 "$work/site.key"
+. "$(dirname "$0")/lib.sh"
 
-"$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5001 --peer 127.0.0.1:5000 --key "$work/site.key" --site-id 2 \
+"$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5001 --peer 127.0.0.1:5000 --key "$key" --site-id 2 \
   --stats-json >"$out/victim.stats" 2>"$out/victim.err" &
 bridge=$!
-candump -L vcan1 >"$out/vcan1.log" &
+candump -r 8388608 -L vcan1 >"$out/vcan1.log" &
 dump=$!
 sleep 1
 
 attack() {  # attack KIND FROM SEQUENCE [extra]
-  "$bin/lever-bridge-attack" --key "$work/site.key" --from "$2" --to 127.0.0.1:5001 --kind "$1" --count 20 \
+  "$bin/lever-bridge-attack" --key "$key" --from "$2" --to 127.0.0.1:5001 --kind "$1" --count 20 \
     --sequence "$3" "${@:4}" >>"$out/attacks.txt"
 }
 attack valid 127.0.0.1:5000 1000
@@ -57,5 +48,4 @@ check "reflections counted" test "$(stat reflected)" -eq 20
 check "the third address counted" test "$(stat foreign_source)" -ge 20
 check "nothing else reached the bus" test "$(grep -cv ' 10[1-7]#' "$out/vcan1.log")" -eq 0
 
-echo "bridge attacks: $passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+finish "bridge attacks"

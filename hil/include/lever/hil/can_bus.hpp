@@ -9,14 +9,13 @@
 #include <vector>
 
 #include "lever/protocol/can_frame.hpp"
+#include "lever/protocol/can_timing.hpp"
 
 namespace lever::hil {
 
 using Nanos = std::int64_t;
 
-// Bits of a classic 11-bit-id data frame with the worst-case stuffing: SOF to IFS is 47 + 8n bits, of which
-// the 34 + 8n before the CRC delimiter may carry a stuff bit after every four equal bits.
-constexpr int frame_bits_worst_case(int dlc) { return 47 + 8 * dlc + (34 + 8 * dlc - 1) / 4; }
+using protocol::frame_bits_worst_case;
 
 template <typename T, std::size_t N>
 class Ring {
