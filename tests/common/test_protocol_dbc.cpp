@@ -2,10 +2,10 @@
 // signal by the DBC's own bit layout (with an extractor written independently of bit_field.hpp), compare.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <map>
-#include <cstdio>
 #include <string>
 
 #include "lever/common/rng.hpp"

@@ -251,8 +251,7 @@ TEST_CASE("whatever arrives on the bus, commanded torque never exceeds the limit
   CHECK(rig.top.counters().rx_stale > 0u);
 }
 
-TEST_CASE("a TOP whose HSI stopped streaming holds still instead of integrating old motion",
-          "[firmware][lever]") {
+TEST_CASE("a TOP whose HSI stopped streaming holds still instead of integrating old motion", "[firmware][lever]") {
   PairRig rig;
   rig.boot_and_arm();
   rig.hand_target = 0.25;
@@ -260,7 +259,7 @@ TEST_CASE("a TOP whose HSI stopped streaming holds still instead of integrating 
   REQUIRE(std::fabs(rig.top.telemetry().velocity_ref_rad_s) > 0.1);
   rig.command(Opcode::disarm, true, false);  // the HSI stops sending data; its heartbeats go on
   rig.run(1500);
-  CHECK(rig.top.supervisor().armed());       // not a comms fault: the HSI is alive
+  CHECK(rig.top.supervisor().armed());  // not a comms fault: the HSI is alive
   CHECK(rig.top.telemetry().velocity_ref_rad_s == 0.0);
   CHECK(std::fabs(rig.top.telemetry().position_ref_rad) < 0.5);  // no runaway reference
   CHECK(std::fabs(rig.top_plant.speed) < 0.01);

@@ -65,8 +65,7 @@ struct Expectation {
 
 }  // namespace
 
-TEST_CASE("every fault kind brings the levers to their safe behaviour, in time, and re-arm recovers",
-          "[hil][faults]") {
+TEST_CASE("every fault kind brings the levers to their safe behaviour, in time, and re-arm recovers", "[hil][faults]") {
   // comms: 50 ms timeout, plus up to a few ms of transport; stale gauge: 5 ticks; the rest: next tick.
   const Expectation cases[] = {
       {"link-down@3+0.5", true, true, fw::Fault::comms_timeout, 0.056},
