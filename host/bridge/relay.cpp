@@ -333,8 +333,7 @@ int Relay::run() {
     if (fds[1].revents & POLLIN) on_timer();
   }
   if (config_.stats_json) print_stats(static_cast<double>(steady_us() - last_stats_us_) * 1e-6);
-  if (recorder_) recorder_->flush();
-  recorder_.reset();  // drains and closes the log
+  recorder_.reset();  // drains, fsyncs and closes the log
   return 0;
 }
 

@@ -43,11 +43,10 @@ int main(int argc, char** argv) {
   app.add_option("--floor", config.floor, "absolute deadband floor in signal units (0 = the paper's rule)")
       ->check(CLI::NonNegativeNumber)
       ->default_str("0");
-  auto* filter = app.add_option("--filter-hz", config.filter_hz, "low-pass prefilter cut-off in Hz (default: off)")
-                     ->check(CLI::PositiveNumber);
+  app.add_option("--filter-hz", config.filter_hz, "low-pass prefilter cut-off in Hz (default: off)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--in", input, "input trace CSV");
   app.add_option("--out", output, "output CSV (written atomically)");
-  (void)filter;
 
   auto* generate = app.add_subcommand("generate", "write an example trace from simple physics");
   lever::tool::GeneratorOptions gen;

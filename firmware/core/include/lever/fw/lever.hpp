@@ -77,7 +77,7 @@ class Lever {
       supervisor_.report(active_faults(now), now);
     }
     const double demand = control(now, dt);
-    apply_torque(now, demand);
+    apply_torque(demand);
     if (supervisor_.armed()) transmit_data(now);
     if (now >= next_heartbeat_) {
       transmit_heartbeat();
@@ -290,7 +290,7 @@ class Lever {
     return clamp_torque(torque, config_.safe_hold_torque_nm);
   }
 
-  void apply_torque(Tick now, double demand) noexcept {
+  void apply_torque(double demand) noexcept {
     telemetry_.torque_demand_nm = demand;
     const bool over = !(demand == demand) || demand > config_.torque_limit_nm || demand < -config_.torque_limit_nm;
     saturated_ticks_ = supervisor_.armed() && over ? saturated_ticks_ + 1 : 0;
@@ -299,7 +299,6 @@ class Lever {
     telemetry_.torque_nm = enable ? clamp_torque(demand, config_.torque_limit_nm) : 0.0;
     telemetry_.motor_enabled = enable;
     hal_.motor().command({telemetry_.torque_nm, enable});
-    (void)now;
   }
 
   void transmit_data(Tick now) noexcept {
