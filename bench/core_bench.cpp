@@ -47,7 +47,7 @@ class RingQueue {
 struct BenchHal {
   struct Encoder {
     std::int32_t counts = 0;
-    std::int32_t read_counts() const { return counts; }
+    std::uint32_t read_counts() const { return static_cast<std::uint32_t>(counts); }
   } encoder_;
   struct Force {
     std::optional<fw::ForceReading> reading;
@@ -133,8 +133,10 @@ RoleTimes run_pair(std::size_t ticks) {
   hsi_cfg.role = protocol::Role::hsi;
   hsi_cfg.use_force_sensor = false;
   top_cfg.role = protocol::Role::top;
-  fw::Lever<BenchHal> hsi(hsi_hal, hsi_cfg);
-  fw::Lever<BenchHal> top(top_hal, top_cfg);
+  hsi_cfg.homing.method = fw::HomingMethod::absolute;  // the bench times the armed pair, not homing
+  top_cfg.homing.method = fw::HomingMethod::absolute;
+  fw::HsiLever<BenchHal> hsi(hsi_hal, hsi_cfg);
+  fw::TopLever<BenchHal> top(top_hal, top_cfg);
   Plant hsi_plant, top_plant;
   const double count = 2.0 * std::numbers::pi / 16384.0;
 
@@ -155,7 +157,7 @@ RoleTimes run_pair(std::size_t ticks) {
     hsi_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(hsi_plant.angle / count));
     top_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(top_plant.angle / count));
     top_hal.force_.reading =
-        fw::ForceReading{static_cast<std::int32_t>(std::lround(wall / 0.1 / (100.0 / 65536.0))), now, false};
+        fw::ForceReading{static_cast<double>(std::lround(wall / 0.1 / (100.0 / 65536.0))), now, false};
 
     const auto t0 = Clock::now();
     hsi.step(now);
@@ -215,8 +217,8 @@ int main(int argc, char** argv) {
           {"mean", median(top_means)},
           {"p99", median(top_p99)},
           {"means", top_means}}}}},
-      {"static_bytes_per_lever", sizeof(fw::Lever<BenchHal>)},
-      {"static_bytes_note", "sizeof(Lever<Hal>): all state of one lever; the HAL it refers to is the board's"},
+      {"static_bytes_per_lever", {{"hsi", sizeof(fw::HsiLever<BenchHal>)}, {"top", sizeof(fw::TopLever<BenchHal>)}}},
+      {"static_bytes_note", "sizeof(Lever<Hal, Role>): all state of one lever; the HAL it refers to is the board's"},
   };
   fmt::print("{}\n", out.dump(2));
   return 0;

@@ -17,6 +17,8 @@ constexpr std::pair<std::string_view, FaultKind> kKinds[] = {
     {"gauge-stale", FaultKind::gauge_stale},
     {"gauge-saturated", FaultKind::gauge_saturated},
     {"motor-fault", FaultKind::motor_fault},
+    {"tick-late", FaultKind::tick_late},
+    {"reboot", FaultKind::reboot},
 };
 
 double number(std::string_view s, std::string_view what, std::string_view spec) {
@@ -81,6 +83,7 @@ FaultSpec parse_fault_spec(std::string_view text) {
       throw std::invalid_argument("fault '" + f.text + "': ':" + std::string(arg) + "' is not hsi or top");
     }
   }
+  if (f.kind == FaultKind::reboot && !has_duration) f.duration_s = 0.0;  // back at once: the hardest case
   return f;
 }
 

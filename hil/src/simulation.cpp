@@ -3,58 +3,63 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 
-#include "lever/fw/lever.hpp"
+#include "lever/common/rng.hpp"
 #include "lever/hil/can_bus.hpp"
-#include "lever/hil/quadrature_encoder.hpp"
 
 namespace lever::hil {
 namespace {
 
 constexpr Nanos kTick = 1'000'000;
-constexpr Nanos kFirmwareTxDelay = 20'000;  // from step() to the frame in the controller's queue
+constexpr fw::Tick kHostPeriod = 100;       // the host looks at the levers every 100 ms
+constexpr fw::Tick kPowerUpLimit = 30'000;  // homing and arming must be done by then
 
-struct SimMotor {
-  fw::MotorCommand last;
-  bool fault = false;
-  void command(const fw::MotorCommand& c) { last = c; }
-  bool driver_fault() const { return fault; }
-};
-
-struct SimCan {
-  CanBus* bus = nullptr;
-  CanBus::Node node = 0;
-  const Nanos* now = nullptr;
-  bool receive(protocol::CanFrame& f) { return bus->receive(node, f); }
-  bool send(const protocol::CanFrame& f) { return bus->send(node, f, *now + kFirmwareTxDelay); }
-};
-
-// The board as the firmware core sees it, made of models.
-struct SimHal {
-  SimHal(double counts_per_rev, double angle, const StrainGaugeParams& gauge, std::uint64_t seed)
-      : encoder_(counts_per_rev, angle), gauge_(gauge, seed) {}
-  QuadratureEncoder encoder_;
-  StrainGaugeModel gauge_;
-  SimMotor motor_;
-  SimCan can_;
-  QuadratureEncoder& encoder() { return encoder_; }
-  StrainGaugeModel& force() { return gauge_; }
-  SimMotor& motor() { return motor_; }
-  SimCan& can() { return can_; }
-};
-static_assert(fw::LeverHal<SimHal>);
-
-// One lever with its plant and hardware, at one site.
+// One lever with its plant and hardware, at one site. The firmware can be rebooted: it is rebuilt from its
+// power-up state on the same hardware, with its own tick counting from 1 again.
+template <typename LeverT>
 struct LeverSite {
   LeverSite(const LeverPlantParams& plant_params, const fw::LeverConfig& fw_config, double angle,
             const StrainGaugeParams& gauge, std::uint64_t seed, CanBus& bus, const Nanos& now)
-      : plant(plant_params, angle), hal(fw_config.counts_per_rev, angle, gauge, seed), lever(hal, fw_config) {
+      : plant(plant_params, angle), hal(fw_config.counts_per_rev, angle, gauge, seed), config(fw_config) {
     hal.can_ = {&bus, bus.add_node(), &now};
+    boot(1);
   }
   LeverPlant plant;
   SimHal hal;
-  fw::Lever<SimHal> lever;
+  fw::LeverConfig config;
+  std::optional<LeverT> lever;
+  fw::Tick boot_tick = 0;  // the simulation tick before the firmware's tick 1
+  bool down = false;       // rebooting: silent, motor disabled (the driver's enable line defaults to off)
+  bool skip = false;       // tick-late: not stepped, the motor keeps its last command
+  std::uint64_t rearms_sent = 0;
+  std::uint64_t rearms_at_fault = 0;
+  fw::LeverState previous_state = fw::LeverState::init;
+
+  void boot(fw::Tick tick) {
+    fw::EncoderEdge discard[64];
+    while (hal.encoder_.drain_edges(discard, 64).count > 0) {
+    }  // the kernel's event queue does not survive a reboot
+    lever.emplace(hal, config);
+    boot_tick = tick - 1;
+    down = false;
+  }
+  void go_down() {
+    down = true;
+    hal.motor_.last = {};
+  }
+  void step(fw::Tick tick) {
+    if (!down && !skip) lever->step(tick - boot_tick);
+  }
   double torque() const { return hal.motor_.last.enable ? hal.motor_.last.torque_nm : 0.0; }
+  bool needs_homing() const {
+    const auto s = lever->supervisor().state();
+    return !lever->position().valid() && (s == fw::LeverState::disarmed || s == fw::LeverState::fault);
+  }
+  bool needs_arming() const {
+    const auto s = lever->supervisor().state();
+    return lever->position().valid() && (s == fw::LeverState::disarmed || s == fw::LeverState::fault);
+  }
 };
 
 // A lever-bridge: every lever-protocol frame on its bus goes to the link, every datagram from the link onto
@@ -77,23 +82,40 @@ struct Bridge {
   }
 };
 
-bool safe_now(const fw::Lever<SimHal>& lever, const SimMotor& motor) {
-  const auto& cfg = lever.config();
-  if (cfg.role == protocol::Role::hsi) return !motor.last.enable || motor.last.torque_nm == 0.0;
-  return std::fabs(motor.last.torque_nm) <= cfg.safe_hold_torque_nm;
+template <typename LeverT>
+bool safe_now(const LeverT& lever, const SimMotor& motor) {
+  if constexpr (!LeverT::role_type::kHoldsOnFault) {
+    return !motor.last.enable || motor.last.torque_nm == 0.0;
+  } else {
+    return std::fabs(motor.last.torque_nm) <= lever.config().safe_hold_torque_nm;
+  }
 }
 
-void track_reaction(FaultReport::LeverReaction& r, const fw::Lever<SimHal>& lever, const SimMotor& motor, double t,
-                    double injected) {
+template <typename LeverT>
+void track_reaction(FaultReport::LeverReaction& r, const LeverSite<LeverT>& site, double t, double injected) {
   if (t < injected) return;
+  const auto& lever = *site.lever;
   const auto state = lever.supervisor().state();
-  if (!r.rearmed_at_s) r.max_torque_nm_during = std::max(r.max_torque_nm_during, std::fabs(motor.last.torque_nm));
+  if (!r.rearmed_at_s)
+    r.max_torque_nm_during = std::max(r.max_torque_nm_during, std::fabs(site.hal.motor_.last.torque_nm));
   if (!r.fault_at_s && state == fw::LeverState::fault) {
     r.fault_at_s = t;
     r.latched = lever.supervisor().latched();
   }
-  if (r.fault_at_s && !r.safe_at_s && safe_now(lever, motor)) r.safe_at_s = t;
+  if (r.fault_at_s && !r.safe_at_s && safe_now(lever, site.hal.motor_)) r.safe_at_s = t;
   if (r.fault_at_s && !r.rearmed_at_s && state == fw::LeverState::armed) r.rearmed_at_s = t;
+}
+
+// Armed again after a fault with no re-arm sent since the fault began: what the safety rules forbid.
+template <typename LeverT>
+void watch_rearm(LeverSite<LeverT>& site, bool& violated) {
+  const auto state = site.lever->supervisor().state();
+  if (state == fw::LeverState::fault && site.previous_state != fw::LeverState::fault)
+    site.rearms_at_fault = site.rearms_sent;
+  if (site.previous_state == fw::LeverState::fault && state == fw::LeverState::armed &&
+      site.rearms_sent == site.rearms_at_fault)
+    violated = true;
+  site.previous_state = state;
 }
 
 }  // namespace
@@ -115,47 +137,81 @@ SimResult run_simulation(const SimConfig& config) {
   fw::LeverConfig hsi_fw = config.hsi_firmware, top_fw = config.top_firmware;
   hsi_fw.motion_codec = config.velocity_codec;
   top_fw.force_codec = config.force_codec;
+  // Power-up angles: anywhere in the working range with homing, the operator's start angle without.
+  double hsi_angle = 0.1, top_angle = 0.1;
+  if (config.homing) {
+    Rng start(config.seed * 4 + 6);
+    hsi_angle = start.uniform(-0.4, 0.25);
+    top_angle = start.uniform(-0.4, 0.25);
+  } else {
+    hsi_fw.homing.method = fw::HomingMethod::absolute;
+    top_fw.homing.method = fw::HomingMethod::absolute;
+  }
   // Levers live at a fixed address: the core holds a reference to its HAL.
-  auto hsi =
-      std::make_unique<LeverSite>(config.hsi_plant, hsi_fw, 0.1, config.gauge, config.seed * 4 + 3, hsi_bus, now);
-  auto top =
-      std::make_unique<LeverSite>(config.top_plant, top_fw, 0.1, config.gauge, config.seed * 4 + 4, top_bus, now);
+  auto hsi = std::make_unique<LeverSite<SimHsi>>(config.hsi_plant, hsi_fw, hsi_angle, config.gauge, config.seed * 4 + 3,
+                                                 hsi_bus, now);
+  auto top = std::make_unique<LeverSite<SimTop>>(config.top_plant, top_fw, top_angle, config.gauge, config.seed * 4 + 4,
+                                                 top_bus, now);
   const auto host = hsi_bus.add_node();  // the operator console at the HSI's site
   const Nanos latency = static_cast<Nanos>(config.bridge_latency_us * 1e3);
   Bridge bridge_hsi{&hsi_bus, hsi_bus.add_node(), &to_top, &to_hsi, latency};
   Bridge bridge_top{&top_bus, top_bus.add_node(), &to_hsi, &to_top, latency};
 
-  HumanOperator op(config.operator_params, config.scenario, config.wall.angle, 0.1, config.seed * 4 + 5);
-  hsi->plant.set_added_inertia(config.operator_params.hand_inertia);
+  // The operator takes the handle once both levers are armed, wherever the HSI then is.
+  std::optional<HumanOperator> op;
+
+  auto send_command = [&](protocol::Opcode opcode, bool to_hsi_lever, bool to_top_lever) {
+    if (!to_hsi_lever && !to_top_lever) return;
+    protocol::CommandMessage m;
+    m.opcode = opcode;
+    m.to_hsi = to_hsi_lever;
+    m.to_top = to_top_lever;
+    hsi_bus.send(host, protocol::pack(m, hsi_fw.pair), now);
+    if (opcode == protocol::Opcode::rearm) {
+      hsi->rearms_sent += to_hsi_lever;
+      top->rearms_sent += to_top_lever;
+    }
+  };
+  // What the host does every 100 ms: home a lever whose position is unknown, re-arm one that can be.
+  auto manage_levers = [&] {
+    send_command(protocol::Opcode::home, hsi->needs_homing(), top->needs_homing());
+    send_command(protocol::Opcode::rearm, hsi->needs_arming(), top->needs_arming());
+  };
 
   // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
   const bool hsi_gauge_used = hsi_fw.use_force_sensor && hsi_fw.display.closed_loop;
   SimResult result;
   for (const auto& f : config.faults) result.faults.push_back({f, {}, {}});
+  std::vector<bool> rebooted(config.faults.size(), false);
   const double top_arm = top_fw.display.lever_arm_m;
-  const auto ticks = static_cast<fw::Tick>(std::llround(config.duration_s * 1000.0));
+  const auto scenario_ticks = static_cast<fw::Tick>(std::llround(config.duration_s * 1000.0));
   const double dt = 1e-3 / config.substeps;
   double sq_position = 0, sq_force = 0, contact_force_sum = 0;
   std::uint64_t violations = 0, contact_ticks = 0;
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
+  fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
 
-  for (fw::Tick tick = 1; tick <= ticks; ++tick) {
-    const double t = static_cast<double>(tick) * 1e-3;
+  for (fw::Tick tick = 1; start == 0 || tick <= start + scenario_ticks; ++tick) {
+    if (start == 0 && tick > kPowerUpLimit)
+      throw std::runtime_error("HIL: the levers were not homed and armed within 30 s of power-up");
+    const bool scenario = start != 0;
+    const double t = scenario ? static_cast<double>(tick - start) * 1e-3 : -1e-3;
     now = static_cast<Nanos>(tick) * kTick;
+    const bool hand_on = op.has_value() && hsi->lever->supervisor().state() != fw::LeverState::homing;
 
     // Physics over the last millisecond, with the motor commands of the last step.
     for (int s = 0; s < config.substeps; ++s) {
-      hsi->plant.advance(hsi->hal.motor_.last.torque_nm, hsi->hal.motor_.last.enable,
-                         op.torque(hsi->plant.angle(), hsi->plant.speed()), dt);
+      const double hand_torque = hand_on ? op->torque(hsi->plant.angle(), hsi->plant.speed()) : 0.0;
+      hsi->plant.advance(hsi->hal.motor_.last.torque_nm, hsi->hal.motor_.last.enable, hand_torque, dt);
       top->plant.advance(top->hal.motor_.last.torque_nm, top->hal.motor_.last.enable,
                          wall_torque(config.wall, top->plant.angle(), top->plant.speed()), dt);
       hsi->hal.encoder_.track(hsi->plant.angle());
       top->hal.encoder_.track(top->plant.angle());
     }
     const double contact = -wall_torque(config.wall, top->plant.angle(), top->plant.speed()) / top_arm;
-    const double hand = op.hand_force(hsi->plant.angle(), hsi->plant.speed());
+    const double hand = hand_on ? op->hand_force(hsi->plant.angle(), hsi->plant.speed()) : 0.0;
 
-    // Faults in force during this tick.
+    // Faults in force during this tick (scenario time).
     bool any_fault_active = false;
     to_top.set_down(false);
     to_hsi.set_down(false);
@@ -163,10 +219,13 @@ SimResult run_simulation(const SimConfig& config) {
     to_hsi.set_burst_loss(0.0);
     to_top.set_extra_delay_ms(0.0);
     to_hsi.set_extra_delay_ms(0.0);
-    for (const auto& f : config.faults) {
+    hsi->skip = top->skip = false;
+    for (std::size_t i = 0; scenario && i < config.faults.size(); ++i) {
+      const auto& f = config.faults[i];
       const bool active = t >= f.start_s && t < f.start_s + f.duration_s;
-      LeverSite& site = f.site == Site::hsi ? *hsi : *top;
-      CanBus& bus = f.site == Site::hsi ? hsi_bus : top_bus;
+      const bool at_hsi = f.site == Site::hsi;
+      SimHal& hal = at_hsi ? hsi->hal : top->hal;
+      CanBus& bus = at_hsi ? hsi_bus : top_bus;
       switch (f.kind) {
         case FaultKind::link_down:
           if (active) {
@@ -187,23 +246,37 @@ SimResult run_simulation(const SimConfig& config) {
           }
           break;
         case FaultKind::bus_off:
-          bus.set_bus_off(site.hal.can_.node, active);
+          bus.set_bus_off(hal.can_.node, active);
           break;
         case FaultKind::encoder_glitch:
-          if (active) site.hal.encoder_.glitch();
+          if (active) hal.encoder_.glitch();
           break;
         case FaultKind::gauge_stale:
-          site.hal.gauge_.set_frozen(active);
+          hal.gauge_.set_frozen(active);
           break;
         case FaultKind::gauge_saturated:
-          site.hal.gauge_.set_saturated(active);
+          hal.gauge_.set_saturated(active);
           break;
         case FaultKind::motor_fault:
-          site.hal.motor_.fault = active;
+          hal.motor_.fault = active;
+          break;
+        case FaultKind::tick_late:
+          if (active) (at_hsi ? hsi->skip : top->skip) = true;
+          break;
+        case FaultKind::reboot:
+          if (!rebooted[i] && t >= f.start_s) {
+            if (active) {
+              at_hsi ? hsi->go_down() : top->go_down();
+            } else {
+              at_hsi ? hsi->boot(tick) : top->boot(tick);
+              rebooted[i] = true;
+            }
+          }
           break;
       }
-      if (active && f.kind != FaultKind::delay_step) any_fault_active = true;
-      if (active) fault_quiet_until = std::max(fault_quiet_until, t + config.rearm_after_s);
+      const bool counts = active || (f.kind == FaultKind::reboot && t >= f.start_s && t < f.start_s + 1e-3);
+      if (counts && f.kind != FaultKind::delay_step) any_fault_active = true;
+      if (counts) fault_quiet_until = std::max(fault_quiet_until, t + config.rearm_after_s);
     }
 
     top->hal.gauge_.update(contact, tick);
@@ -217,32 +290,43 @@ SimResult run_simulation(const SimConfig& config) {
     bridge_hsi.pump(now);
     bridge_top.pump(now);
 
-    // The host arms both levers, and re-arms them once injected faults are over.
-    if (tick % 100 == 0 && !any_fault_active && t >= fault_quiet_until) {
-      const bool hsi_armed = hsi->lever.supervisor().armed(), top_armed = top->lever.supervisor().armed();
-      if (!hsi_armed || !top_armed) {
-        protocol::CommandMessage rearm;
-        rearm.opcode = protocol::Opcode::rearm;
-        rearm.to_hsi = !hsi_armed;
-        rearm.to_top = !top_armed;
-        hsi_bus.send(host, protocol::pack(rearm, hsi_fw.pair), now);
-      }
+    // The host homes and arms both levers after power-up, and once injected faults are over re-homes and
+    // re-arms the ones that need it.
+    if (!scenario) {
+      if (tick % kHostPeriod == 50) manage_levers();  // heartbeats have flowed for 50 ms by then
+    } else if ((tick - start) % kHostPeriod == 0 && !any_fault_active && t >= fault_quiet_until) {
+      manage_levers();
     }
 
-    op.update(tick, hand);
-    hsi->lever.step(tick);
-    top->lever.step(tick);
+    if (op) op->update(tick - start, hand);
+    hsi->step(tick);
+    top->step(tick);
+
+    const auto& hl = *hsi->lever;
+    const auto& tl = *top->lever;
+    const bool both_armed = hl.supervisor().armed() && tl.supervisor().armed();
+    if (!scenario) {
+      if (both_armed) {
+        start = tick;
+        result.homed_at_s = static_cast<double>(tick) * 1e-3;
+        op.emplace(config.operator_params, config.scenario, config.wall.angle, hsi->plant.angle(), config.seed * 4 + 5);
+        hsi->plant.set_added_inertia(config.operator_params.hand_inertia);
+      }
+      if (config.observer) config.observer({t, tick, hl, tl, hsi->rearms_sent, top->rearms_sent});
+      continue;
+    }
+    hsi->plant.set_added_inertia(hand_on ? config.operator_params.hand_inertia : 0.0);
 
     // Measurements.
-    const auto& ht = hsi->lever.telemetry();
-    const auto& tt = top->lever.telemetry();
-    const bool both_armed = hsi->lever.supervisor().armed() && top->lever.supervisor().armed();
+    const auto& ht = hl.telemetry();
+    const auto& tt = tl.telemetry();
     const double measured = tt.force_n.value_or(0.0);
     const double displayed = ht.remote.value_or(0.0);
     if (both_armed) {
       ++result.armed_ticks;
       result.motion_frames += ht.sent_data;
       result.force_frames += tt.sent_data;
+      result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
       const double dp = top->plant.angle() - hsi->plant.angle();
       sq_position += dp * dp;
       const double df = displayed - measured;
@@ -254,17 +338,27 @@ SimResult run_simulation(const SimConfig& config) {
       }
     }
     for (auto& r : result.faults) {
-      track_reaction(r.hsi, hsi->lever, hsi->hal.motor_, t, r.spec.start_s);
-      track_reaction(r.top, top->lever, top->hal.motor_, t, r.spec.start_s);
+      track_reaction(r.hsi, *hsi, t, r.spec.start_s);
+      track_reaction(r.top, *top, t, r.spec.start_s);
+    }
+    bool hsi_bad = false, top_bad = false;
+    watch_rearm(*hsi, hsi_bad);
+    watch_rearm(*top, top_bad);
+    for (auto& r : result.faults) {
+      r.hsi.armed_without_rearm = r.hsi.armed_without_rearm || hsi_bad;
+      r.top.armed_without_rearm = r.top.armed_without_rearm || top_bad;
     }
     if (config.record_trace) {
       result.trace.push_back({t, hsi->plant.angle(), top->plant.angle(), ht.velocity_rad_s, tt.position_ref_rad,
                               contact, measured, displayed, hsi->torque(), top->torque(), hand, ht.sent_data,
-                              tt.sent_data, static_cast<int>(hsi->lever.supervisor().state()),
-                              static_cast<int>(top->lever.supervisor().state())});
+                              tt.sent_data, static_cast<int>(hl.supervisor().state()),
+                              static_cast<int>(tl.supervisor().state())});
     }
+    if (config.observer) config.observer({t, tick, hl, tl, hsi->rearms_sent, top->rearms_sent});
   }
 
+  const auto& hl = *hsi->lever;
+  const auto& tl = *top->lever;
   const double n = result.armed_ticks > 0 ? static_cast<double>(result.armed_ticks) : 1.0;
   result.velocity_packet_rate = static_cast<double>(result.motion_frames) / n;
   result.force_packet_rate = static_cast<double>(result.force_frames) / n;
@@ -278,8 +372,12 @@ SimResult run_simulation(const SimConfig& config) {
   result.network_sent = to_top.stats().sent + to_hsi.stats().sent;
   result.network_lost = to_top.stats().lost + to_hsi.stats().lost;
   result.network_reordered = to_top.stats().reordered + to_hsi.stats().reordered;
-  result.hsi_seq_gaps = hsi->lever.force_receiver().sequence().missing();
-  result.top_seq_gaps = top->lever.motion_receiver().sequence().missing();
+  result.hsi_seq_gaps = hl.role().receiver().sequence().missing();
+  result.top_seq_gaps = tl.role().receiver().sequence().missing();
+  result.hsi_overruns = hl.timing().stats().overruns;
+  result.top_overruns = tl.timing().stats().overruns;
+  result.hsi_edges_lost = hsi->hal.encoder_.overflowed();
+  result.top_edges_lost = top->hal.encoder_.overflowed();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   result.realtime_factor = config.duration_s / result.wall_time_s;
   return result;

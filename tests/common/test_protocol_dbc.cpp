@@ -96,7 +96,7 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
     m.velocity = static_cast<std::int16_t>(rng.next());
     m.tick = static_cast<std::uint16_t>(rng.next());
     m.seq = static_cast<std::uint8_t>(rng.next());
-    m.flags = {flag(), flag(), flag(), flag() ? lever::codec::Mode::predictive : lever::codec::Mode::deadband};
+    m.flags = {flag(), flag(), flag(), flag() ? lever::codec::Mode::predictive : lever::codec::Mode::deadband, flag()};
     check_frame(dbc.at("LeverMotion"), pack(m, 0),
                 {{"Position", m.position * kPositionLsbRad},
                  {"Velocity", m.velocity * kVelocityLsb},
@@ -105,34 +105,45 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
                  {"PositionSaturated", m.flags.value_saturated},
                  {"VelocitySaturated", m.flags.velocity_saturated},
                  {"Refresh", m.flags.refresh},
-                 {"Predictive", m.flags.mode == lever::codec::Mode::predictive}});
+                 {"Predictive", m.flags.mode == lever::codec::Mode::predictive},
+                 {"Restart", m.flags.restart}});
 
     ForceMessage f;
     f.force = static_cast<std::int32_t>(rng.next() % (1u << 24)) - (1 << 23);
     f.tick = static_cast<std::uint16_t>(rng.next());
     f.seq = static_cast<std::uint8_t>(rng.next());
-    f.flags = {flag(), false, flag(), flag() ? lever::codec::Mode::predictive : lever::codec::Mode::deadband};
+    f.flags = {flag(), false, flag(), flag() ? lever::codec::Mode::predictive : lever::codec::Mode::deadband, flag()};
     check_frame(dbc.at("LeverForce"), pack(f, 0),
                 {{"Force", f.force * kForceLsb},
                  {"Tick", f.tick},
                  {"Seq", f.seq},
                  {"ForceSaturated", f.flags.value_saturated},
                  {"Refresh", f.flags.refresh},
-                 {"Predictive", f.flags.mode == lever::codec::Mode::predictive}});
+                 {"Predictive", f.flags.mode == lever::codec::Mode::predictive},
+                 {"Restart", f.flags.restart}});
 
-    HeartbeatMessage h{static_cast<LeverState>(rng.next() % 4), static_cast<std::uint16_t>(rng.next()),
-                       static_cast<std::uint8_t>(rng.next()),   static_cast<std::uint8_t>(rng.next()),
-                       static_cast<std::uint8_t>(rng.next()),   static_cast<std::uint8_t>(rng.next()),
-                       static_cast<std::uint8_t>(rng.next())};
-    const Expected heartbeat{{"State", static_cast<double>(h.state)}, {"Faults", h.faults},
-                             {"LastDataSeq", h.last_data_seq},        {"SeqGaps", h.seq_gaps},
-                             {"RejectedFrames", h.rejected_frames},   {"Counter", h.counter},
+    HeartbeatMessage h;
+    h.state = static_cast<LeverState>(rng.next() % 5);
+    h.position_valid = flag();
+    h.faults = static_cast<std::uint16_t>(rng.next());
+    h.last_data_seq = static_cast<std::uint8_t>(rng.next());
+    h.seq_gaps = static_cast<std::uint8_t>(rng.next());
+    h.rejected_frames = static_cast<std::uint8_t>(rng.next());
+    h.counter = static_cast<std::uint8_t>(rng.next());
+    h.encoder_errors = static_cast<std::uint8_t>(rng.next());
+    const Expected heartbeat{{"State", static_cast<double>(h.state)},
+                             {"PositionValid", h.position_valid},
+                             {"Faults", h.faults},
+                             {"LastDataSeq", h.last_data_seq},
+                             {"SeqGaps", h.seq_gaps},
+                             {"RejectedFrames", h.rejected_frames},
+                             {"Counter", h.counter},
                              {"EncoderErrors", h.encoder_errors}};
     check_frame(dbc.at("LeverHeartbeatHsi"), pack(h, 0, Role::hsi), heartbeat);
     check_frame(dbc.at("LeverHeartbeatTop"), pack(h, 0, Role::top), heartbeat);
 
     CommandMessage c;
-    c.opcode = static_cast<Opcode>(1 + rng.next() % 5);
+    c.opcode = static_cast<Opcode>(1 + rng.next() % 6);
     c.to_hsi = flag();
     c.to_top = flag();
     c.direction = flag() ? Direction::force : Direction::motion;

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "lever/fw/hal.hpp"
@@ -11,6 +12,8 @@
 namespace lever::test {
 
 using fw::AbState;
+using fw::EdgeDrain;
+using fw::EncoderEdge;
 using fw::ForceReading;
 using fw::MotorCommand;
 using protocol::CanFrame;
@@ -32,7 +35,7 @@ class CanBus {
       if (bus_->tx_full) return false;
       bus_->log.push_back(frame);
       for (std::size_t i = 0; i < bus_->rx_.size(); ++i)
-        if (i != index_ && !bus_->cut) bus_->rx_[i].push_back(frame);
+        if (i != index_ && !bus_->cut && frame.id != bus_->drop_id) bus_->rx_[i].push_back(frame);
       return true;
     }
 
@@ -51,25 +54,33 @@ class CanBus {
   }
 
   std::vector<CanFrame> log;
-  bool cut = false;      // frames are sent but nobody receives them
-  bool tx_full = false;  // the controller's queue refuses frames
+  bool cut = false;           // frames are sent but nobody receives them
+  std::uint32_t drop_id = 0;  // frames with this id are sent but nobody receives them (0: none)
+  bool tx_full = false;       // the controller's queue refuses frames
 
  private:
   std::vector<std::deque<CanFrame>> rx_;
 };
 
+// A hardware counter: the raw register value, wrapping at its width like a timer in encoder mode.
 struct FakeEncoder {
   std::int32_t counts = 0;
-  std::int32_t read_counts() const { return counts; }
+  std::uint32_t width_mask = 0xFFFFFFFFu;
+  std::uint32_t read_counts() const { return static_cast<std::uint32_t>(counts) & width_mask; }
 };
 
+// An edge source: queued edges, and losses it knows of, reported with the drain that reaches them.
 struct FakeEdgeEncoder {
-  std::vector<AbState> pending;
-  std::size_t drain_edges(AbState* out, std::size_t capacity) {
+  std::vector<EncoderEdge> pending;
+  std::uint32_t lost = 0;
+  void push(AbState levels, bool index = false) { pending.push_back({levels, index}); }
+  EdgeDrain drain_edges(EncoderEdge* out, std::size_t capacity) {
     const std::size_t n = pending.size() < capacity ? pending.size() : capacity;
     for (std::size_t i = 0; i < n; ++i) out[i] = pending[i];
     pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(n));
-    return n;
+    EdgeDrain d{n, 0};
+    if (pending.empty()) d.lost = std::exchange(lost, 0u);
+    return d;
   }
 };
 

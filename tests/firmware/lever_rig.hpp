@@ -25,10 +25,12 @@ struct LeverPlant {
   }
 };
 
+// The rig's levers have absolute encoders (no homing) unless a test says otherwise.
 inline fw::LeverConfig rig_config(protocol::Role role) {
   fw::LeverConfig c;
   c.role = role;
   c.use_force_sensor = role == protocol::Role::top;
+  c.homing.method = fw::HomingMethod::absolute;
   return c;
 }
 
@@ -66,8 +68,7 @@ class PairRig {
     if (gauge_alive) {
       const auto& g = top.config().gauge;
       const double code = std::round(contact_force() / g.newton_per_count + g.offset_counts);
-      top_hal.force_.reading =
-          fw::ForceReading{static_cast<std::int32_t>(std::clamp(code, -32768.0, 32767.0)), now, false};
+      top_hal.force_.reading = fw::ForceReading{std::clamp(code, -32768.0, 32767.0), now, false};
     }
     hsi.step(now);
     top.step(now);
@@ -94,8 +95,8 @@ class PairRig {
   CanBus bus;
   FakeHal<> hsi_hal;
   FakeHal<> top_hal;
-  fw::Lever<FakeHal<>> hsi;
-  fw::Lever<FakeHal<>> top;
+  fw::HsiLever<FakeHal<>> hsi;
+  fw::TopLever<FakeHal<>> top;
   LeverPlant hsi_plant;
   LeverPlant top_plant;
   bool gauge_alive = true;

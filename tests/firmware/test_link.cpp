@@ -28,10 +28,29 @@ TEST_CASE("sequence numbers tell gaps from duplicates and reordering, across the
 
 TEST_CASE("the sender's 16-bit tick unwraps into a monotonic 64-bit tick", "[firmware][link]") {
   TickUnwrapper u;
-  CHECK(u.unwrap(65530) == 65530u);
-  CHECK(u.unwrap(65535) == 65535u);
-  CHECK(u.unwrap(4) == 65540u);
-  CHECK(u.unwrap(100) == 65636u);
+  CHECK(u.unwrap(65530).tick == 65530u);
+  CHECK(u.unwrap(65535).tick == 65535u);
+  CHECK(u.unwrap(4).tick == 65540u);
+  CHECK(u.unwrap(100).tick == 65636u);
+  CHECK_FALSE(u.unwrap(101).restarted);
+}
+
+TEST_CASE("a sender's clock going back restarts the unwrap instead of underflowing", "[firmware][link]") {
+  // A peer that rebooted to a small tick once gave a time near 2^64 here, and NaN references downstream.
+  TickUnwrapper u;
+  CHECK(u.unwrap(10).tick == 10u);
+  CHECK(u.unwrap(20).tick == 20u);
+  const auto back = u.unwrap(3);  // rebooted: 17 ticks "back"
+  CHECK(back.restarted);
+  CHECK(back.tick == 3u);
+  CHECK(u.unwrap(4).tick == 4u);
+  // Back by the most a 16-bit difference can say, repeatedly: never below the new tick, never wrapping.
+  for (int i = 0; i < 100; ++i) {
+    const auto r = u.unwrap(static_cast<std::uint16_t>(4 + 32768 * (i + 1)));
+    CHECK(r.tick < 70000u);
+  }
+  u.unwrap(7);
+  CHECK(u.unwrap(7).restarted);  // the same tick twice: not an advance
 }
 
 TEST_CASE("the watchdog fires only after the timeout", "[firmware][link]") {
@@ -43,6 +62,11 @@ TEST_CASE("the watchdog fires only after the timeout", "[firmware][link]") {
 }
 
 namespace {
+
+template <typename Out>
+lever::protocol::DataFlags flags_of(const Out& out) {
+  return {out.saturated, false, out.refresh, out.mode, out.restart};
+}
 
 struct Link {
   DataSender<std::int32_t> tx;
@@ -63,7 +87,7 @@ TEST_CASE("deadband silence keeps the receiver exact; the refresh bounds it", "[
     const double force = 5.0;  // constant: the deadband alone would never send again
     const auto out = link.tx.offer(now, force);
     if (out.send) {
-      REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code));
+      REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, flags_of(out), out.code));
       if (sent > 0) longest_silence = std::max(longest_silence, now - last_sent);
       last_sent = now;
       ++sent;
@@ -80,7 +104,7 @@ TEST_CASE("a stream that stopped is stale, not held forever", "[firmware][link]"
   Link link({Mode::predictive, 0.1, 0.0, 0.0}, 100);
   for (Tick now = 0; now < 10; ++now) {
     const auto out = link.tx.offer(now, static_cast<double>(now));  // a ramp
-    if (out.send) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code);
+    if (out.send) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, flags_of(out), out.code);
   }
   const Tick last = link.rx.last_arrival();  // the predictor needed only the first samples of the ramp
   CHECK(link.rx.value_at(last + 200, 200).has_value());
@@ -94,7 +118,7 @@ TEST_CASE("a lost update heals at the next refresh, and the gap is counted", "[f
     const double force = now < 50 ? 1.0 : 3.0;  // one step at tick 50
     const auto out = link.tx.offer(now, force);
     const bool lose = now == 50;  // exactly the frame carrying the step
-    if (out.send && !lose) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code);
+    if (out.send && !lose) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, flags_of(out), out.code);
     if (now > 50 && healed_at == 0 && std::fabs(*link.rx.value_at(now, 1000) - 3.0) < 1e-4) healed_at = now;
   }
   CHECK(healed_at == 150u);  // the refresh 100 ticks after the lost frame
@@ -103,13 +127,45 @@ TEST_CASE("a lost update heals at the next refresh, and the gap is counted", "[f
 
 TEST_CASE("duplicates and late frames are not fed to the model", "[firmware][link]") {
   Link link({Mode::predictive, 0.05, 0.0, 0.0});
-  const auto a = link.tx.offer(0, 1.0);
-  const auto b = link.tx.offer(1, 2.0);
-  REQUIRE((a.send && b.send));
-  CHECK(link.rx.accept(1, 1, b.seq, b.mode, b.code));
-  CHECK_FALSE(link.rx.accept(2, 0, a.seq, a.mode, a.code));  // late
-  CHECK_FALSE(link.rx.accept(2, 1, b.seq, b.mode, b.code));  // duplicate
-  CHECK(link.rx.sequence().stale() == 2u);
+  const auto first = link.tx.offer(0, 1.0);
+  const auto a = link.tx.offer(1, 2.0);
+  const auto b = link.tx.offer(2, 3.5);
+  REQUIRE((first.send && first.restart && a.send && b.send && !a.restart));
+  CHECK(link.rx.accept(0, 0, first.seq, flags_of(first), first.code));
+  CHECK(link.rx.accept(2, 2, b.seq, flags_of(b), b.code));
+  CHECK_FALSE(link.rx.accept(3, 1, a.seq, flags_of(a), a.code));              // late
+  CHECK_FALSE(link.rx.accept(3, 2, b.seq, flags_of(b), b.code));              // duplicate
+  CHECK_FALSE(link.rx.accept(3, 0, first.seq, flags_of(first), first.code));  // the restart frame, again
+  CHECK(link.rx.sequence().stale() == 3u);
+  CHECK(link.rx.restarts() == 1u);
+}
+
+TEST_CASE("a restarted sender is followed at once: its first frame resets the receiver, whatever its numbers",
+          "[firmware][link][reboot]") {
+  // Before: the staleness check ran first, so a rebooted peer whose sequence numbers looked old was dropped
+  // for up to 127 frames; and the receiver kept the old stream's samples, so in predictive mode it
+  // extrapolated a slope from before the restart.
+  Link link({Mode::predictive, 0.0, 0.0, 0.0}, 100);
+  Tick now = 0;
+  for (; now < 5000 && !(now > 300 && link.tx.last_seq() > 128); ++now) {
+    const auto out = link.tx.offer(now + 40000, std::sin(static_cast<double>(now) * 0.01));
+    if (out.send)
+      REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now + 40000), out.seq, flags_of(out), out.code));
+  }
+  REQUIRE(link.tx.last_seq() > 128);  // the new stream's first numbers look stale to the old tracker
+  // The sender reboots: new sender, sequence from 0, tick from 1.
+  Link rebooted({Mode::predictive, 0.0, 0.0, 0.0}, 100);
+  for (Tick t = 1; t < 400; ++t, ++now) {
+    const auto out = rebooted.tx.offer(t, 3.0 + 0.002 * static_cast<double>(t));
+    if (!out.send) continue;
+    REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(t), out.seq, flags_of(out), out.code));
+    // Coherent from the first frame on: the receiver believes exactly what the sender believes.
+    const auto shown = link.rx.value_at(now, 1000);
+    REQUIRE(shown.has_value());
+    const double believed = rebooted.tx.codec_sender().model().at(static_cast<double>(t))[0];
+    REQUIRE(std::memcmp(&believed, &*shown, sizeof(double)) == 0);
+    REQUIRE(std::isfinite(*shown));
+  }
 }
 
 TEST_CASE("changing parameters mid-stream keeps both ends bit-identical", "[firmware][link]") {
@@ -129,7 +185,7 @@ TEST_CASE("changing parameters mid-stream keeps both ends bit-identical", "[firm
     if (out.send) {
       if (out.mode != receiver_mode) ++mode_switches_seen;
       receiver_mode = out.mode;
-      REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, out.mode, out.code));
+      REQUIRE(link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, flags_of(out), out.code));
     }
     const auto shown = link.rx.value_at(now, 1000);
     REQUIRE(shown.has_value());

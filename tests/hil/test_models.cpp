@@ -107,34 +107,64 @@ TEST_CASE("the encoder's edges decode back to its count; glitches are illegal tr
   QuadratureEncoder encoder(16384.0, 0.0);
   fw::QuadratureDecoder decoder;
   decoder.reset(encoder.levels());
-  fw::AbState edges[1024];
-  for (double angle = 0.0; angle < 1.0; angle += 0.003) {
+  fw::EncoderEdge edges[64];
+  std::uint32_t lost = 0;
+  auto drain = [&] {
+    for (fw::EdgeDrain d; (d = encoder.drain_edges(edges, 64)).count > 0 || d.lost > 0;) {
+      lost += d.lost;
+      for (std::size_t i = 0; i < d.count; ++i) decoder.feed(edges[i]);
+    }
+  };
+  for (double angle = 0.0; angle < 1.0; angle += 0.003) {  // 7.8 edges per step: within the 32-edge queue
     encoder.track(angle);
-    const auto n = encoder.drain_edges(edges, 1024);
-    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+    drain();
   }
   for (double angle = 1.0; angle > -0.5; angle -= 0.003) {
     encoder.track(angle);
-    const auto n = encoder.drain_edges(edges, 1024);
-    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+    drain();
   }
   encoder.track(-0.5);
-  for (std::size_t n; (n = encoder.drain_edges(edges, 1024)) > 0;)
-    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  drain();
   CHECK(decoder.counts() == encoder.count());
   CHECK(encoder.overflowed() == 0u);
+  CHECK(lost == 0u);
   CHECK(decoder.counts() == static_cast<std::int32_t>(std::floor(-0.5 / (2 * std::numbers::pi / 16384))));
   CHECK(decoder.illegal_transitions() == 0u);
   encoder.glitch();
-  for (std::size_t n; (n = encoder.drain_edges(edges, 1024)) > 0;)
-    for (std::size_t i = 0; i < n; ++i) decoder.feed(edges[i]);
+  drain();
   CHECK(decoder.illegal_transitions() == 2u);
 }
 
-TEST_CASE("edges beyond the queue's capacity are lost and counted, like a kernel event FIFO", "[hil][encoder]") {
+TEST_CASE("the index fires once a turn, at count 0, in both directions", "[hil][encoder]") {
+  QuadratureEncoder encoder(16384.0, -0.01);
+  fw::QuadratureDecoder decoder;
+  decoder.reset(encoder.levels());
+  fw::EncoderEdge edges[64];
+  int indices = 0;
+  for (double angle = -0.01; angle < 0.01; angle += 0.001) {
+    encoder.track(angle);
+    for (fw::EdgeDrain d; (d = encoder.drain_edges(edges, 64)).count > 0;)
+      for (std::size_t i = 0; i < d.count; ++i) {
+        decoder.feed(edges[i]);
+        indices += edges[i].index;
+      }
+  }
+  CHECK(indices == 1);
+  const auto at = decoder.take_index();
+  REQUIRE(at.has_value());
+  // The decoder started at the encoder's power-up count (-27), so count 0 is 27 counts on.
+  CHECK(*at == 27);
+}
+
+TEST_CASE("edges beyond the queue's capacity are lost, counted and reported to the drain", "[hil][encoder]") {
   QuadratureEncoder encoder(16384.0, 0.0);
-  encoder.track(1.0);  // 2607 edges at once
-  CHECK(encoder.overflowed() == 2607u - 1024u);
+  encoder.track(1.0);  // 2607 edges at once into libgpiod's 2 x 16 events
+  CHECK(encoder.overflowed() == 2607u - 32u);
+  fw::EncoderEdge edges[64];
+  const auto d = encoder.drain_edges(edges, 64);
+  CHECK(d.count == 32u);
+  CHECK(d.lost == 2607u - 32u);
+  CHECK(encoder.drain_edges(edges, 64).lost == 0u);  // said once
 }
 
 TEST_CASE("the gauge samples at its own rate, with noise of the configured size", "[hil][gauge]") {

@@ -1,4 +1,4 @@
-// Instantiates the lever core for both encoder flavours with a minimal HAL, compiled -fno-exceptions
+// Instantiates the lever core for both roles and both encoder flavours with a minimal HAL, compiled -fno-exceptions
 // -fno-rtti; cmake/check_freestanding.sh then proves the object needs no heap, exceptions or OS.
 #include <cstddef>
 #include <optional>
@@ -8,10 +8,10 @@
 namespace lever::fw::freestanding {
 
 struct EdgeEncoder {
-  std::size_t drain_edges(AbState*, std::size_t) { return 0; }
+  EdgeDrain drain_edges(EncoderEdge*, std::size_t) { return {}; }
 };
 struct CountingEncoder {
-  std::int32_t read_counts() { return 0; }
+  std::uint32_t read_counts() { return 0; }
 };
 struct Force {
   std::optional<ForceReading> latest() { return std::nullopt; }
@@ -39,5 +39,8 @@ struct Hal {
 
 }  // namespace lever::fw::freestanding
 
-template class lever::fw::Lever<lever::fw::freestanding::Hal<lever::fw::freestanding::EdgeEncoder>>;
-template class lever::fw::Lever<lever::fw::freestanding::Hal<lever::fw::freestanding::CountingEncoder>>;
+namespace fs = lever::fw::freestanding;
+template class lever::fw::Lever<fs::Hal<fs::EdgeEncoder>, lever::fw::HsiRole>;
+template class lever::fw::Lever<fs::Hal<fs::EdgeEncoder>, lever::fw::TopRole>;
+template class lever::fw::Lever<fs::Hal<fs::CountingEncoder>, lever::fw::HsiRole>;
+template class lever::fw::Lever<fs::Hal<fs::CountingEncoder>, lever::fw::TopRole>;

@@ -11,6 +11,7 @@
 #include "lever/codec/config.hpp"
 #include "lever/protocol/bit_field.hpp"
 #include "lever/protocol/can_frame.hpp"
+#include "lever/protocol/faults.hpp"
 
 namespace lever::protocol {
 
@@ -82,6 +83,9 @@ struct DataFlags {
   bool velocity_saturated = false;           // motion only
   bool refresh = false;                      // sent to refresh the receiver's reference, not because of the deadband
   codec::Mode mode = codec::Mode::deadband;  // the model the receiver must use from this sample on
+  // The first sample of a new stream (the sender armed, re-armed or rebooted): the receiver forgets every
+  // earlier sample, sequence number and tick, so its model restarts exactly as the sender's did.
+  bool restart = false;
 };
 
 // HSI -> TOP: velocity through the deadband, with the position riding on every frame (paper section III-A).
@@ -102,11 +106,12 @@ struct ForceMessage {
 };
 
 // Stable numbers: on the wire in heartbeats.
-enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault = 3 };
+enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault = 3, homing = 4 };
 
 struct HeartbeatMessage {
   LeverState state = LeverState::init;
-  std::uint16_t faults = 0;          // latched fault bits (firmware/core/include/lever/fw/faults.hpp)
+  bool position_valid = false;       // homed, or an absolute encoder: the position is in lever coordinates
+  std::uint16_t faults = 0;          // latched fault bits (faults.hpp)
   std::uint8_t last_data_seq = 0;    // sequence number of the sender's last data frame
   std::uint8_t seq_gaps = 0;         // data frames found missing, saturating
   std::uint8_t rejected_frames = 0;  // frames that failed to decode, saturating
@@ -115,7 +120,7 @@ struct HeartbeatMessage {
 };
 
 // Stable numbers: on the wire.
-enum class Opcode : std::uint8_t { arm = 1, disarm = 2, rearm = 3, tare = 4, set_deadband = 5 };
+enum class Opcode : std::uint8_t { arm = 1, disarm = 2, rearm = 3, tare = 4, set_deadband = 5, home = 6 };
 enum class Direction : std::uint8_t { motion = 0, force = 1 };
 
 struct CommandMessage {
@@ -135,14 +140,15 @@ struct CommandMessage {
 namespace detail {
 constexpr std::uint64_t pack_flags(const DataFlags& f) noexcept {
   return (f.value_saturated ? 1u : 0u) | (f.velocity_saturated ? 2u : 0u) | (f.refresh ? 4u : 0u) |
-         (f.mode == codec::Mode::predictive ? 8u : 0u);
+         (f.mode == codec::Mode::predictive ? 8u : 0u) | (f.restart ? 16u : 0u);
 }
 constexpr DecodeError unpack_flags(std::uint64_t raw, DataFlags& f) noexcept {
-  if (raw & 0xF0u) return DecodeError::out_of_range;  // reserved bits
+  if (raw & 0xE0u) return DecodeError::out_of_range;  // reserved bits
   f.value_saturated = raw & 1u;
   f.velocity_saturated = raw & 2u;
   f.refresh = raw & 4u;
   f.mode = (raw & 8u) ? codec::Mode::predictive : codec::Mode::deadband;
+  f.restart = raw & 16u;
   return DecodeError::none;
 }
 constexpr CanFrame frame(std::uint32_t id) noexcept { return CanFrame{id, 8, {}}; }
@@ -173,7 +179,8 @@ constexpr CanFrame pack(const ForceMessage& m, std::uint8_t pair) noexcept {
 
 constexpr CanFrame pack(const HeartbeatMessage& m, std::uint8_t pair, Role role) noexcept {
   CanFrame f = detail::frame(heartbeat_id(pair, role));
-  put_bits(f.data, 0, 8, static_cast<std::uint8_t>(m.state));
+  put_bits(f.data, 0, 4, static_cast<std::uint8_t>(m.state));
+  put_bits(f.data, 4, 1, m.position_valid);
   put_bits(f.data, 8, 16, m.faults);
   put_bits(f.data, 24, 8, m.last_data_seq);
   put_bits(f.data, 32, 8, m.seq_gaps);
@@ -228,9 +235,11 @@ constexpr DecodeError decode(const CanFrame& f, ForceMessage& m, FrameAddress& a
 
 constexpr DecodeError decode(const CanFrame& f, HeartbeatMessage& m, FrameAddress& address) noexcept {
   if (const auto e = detail::expect(f, MessageKind::heartbeat, address); e != DecodeError::none) return e;
-  const auto state = get_bits(f.data, 0, 8);
-  if (state > static_cast<std::uint8_t>(LeverState::fault)) return DecodeError::out_of_range;
+  const auto state = get_bits(f.data, 0, 4);
+  if (state > static_cast<std::uint8_t>(LeverState::homing)) return DecodeError::out_of_range;
+  if (get_bits(f.data, 5, 3) != 0) return DecodeError::out_of_range;  // reserved
   m.state = static_cast<LeverState>(state);
+  m.position_valid = get_bits(f.data, 4, 1);
   m.faults = static_cast<std::uint16_t>(get_bits(f.data, 8, 16));
   m.last_data_seq = static_cast<std::uint8_t>(get_bits(f.data, 24, 8));
   m.seq_gaps = static_cast<std::uint8_t>(get_bits(f.data, 32, 8));
@@ -243,7 +252,7 @@ constexpr DecodeError decode(const CanFrame& f, HeartbeatMessage& m, FrameAddres
 constexpr DecodeError decode(const CanFrame& f, CommandMessage& m, FrameAddress& address) noexcept {
   if (const auto e = detail::expect(f, MessageKind::command, address); e != DecodeError::none) return e;
   const auto opcode = get_bits(f.data, 0, 8);
-  if (opcode < static_cast<std::uint8_t>(Opcode::arm) || opcode > static_cast<std::uint8_t>(Opcode::set_deadband))
+  if (opcode < static_cast<std::uint8_t>(Opcode::arm) || opcode > static_cast<std::uint8_t>(Opcode::home))
     return DecodeError::out_of_range;
   const auto mode = get_bits(f.data, 11, 2);
   if (mode > static_cast<std::uint8_t>(codec::Mode::predictive)) return DecodeError::out_of_range;

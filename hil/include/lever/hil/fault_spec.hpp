@@ -8,6 +8,11 @@
 //   gauge-stale@5+0.5      the TOP's amplifier stops delivering samples
 //   gauge-saturated@5+0.5  the TOP's amplifier reads at its limit
 //   motor-fault@5+0.5:top  the motor driver reports a fault
+//   tick-late@5+0.02:top   the lever's firmware is not stepped for 20 ms (a scheduling hiccup); the motor keeps
+//                          its last command meanwhile, as a PWM output does
+//   reboot@5+0.2:hsi       the lever's controller restarts: silent with its motor disabled for DURATION
+//                          (default 0: back at once), then from power-up state, ticks and sequence numbers
+//                          included; the host homes it and re-arms the pair
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -23,6 +28,8 @@ enum class FaultKind : std::uint8_t {
   gauge_stale,
   gauge_saturated,
   motor_fault,
+  tick_late,
+  reboot,
 };
 
 enum class Site : std::uint8_t { hsi, top };

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "lever/common/rng.hpp"
-#include "lever/fw/strain_gauge.hpp"  // Tick
+#include "lever/fw/tick.hpp"
 
 namespace lever::hil {
 

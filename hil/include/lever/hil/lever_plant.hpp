@@ -12,6 +12,11 @@ struct LeverPlantParams {
   double coulomb_speed = 0.02;        // rad/s: below this the Coulomb term fades in smoothly (no chattering)
   double motor_torque_limit = 1.5;    // N m: what the motor can physically give, above the firmware's 1 N m
   double motor_time_constant = 5e-4;  // s: current loop and winding inductance as a first-order lag
+  // The mechanical end stop on the negative side, which homing drives into: a rubber bumper whose 20 N m/rad
+  // (2 kN/m at the 0.1 m handle) gives a few millimetres under a hand's push. Infinite angle: no stop.
+  double stop_angle = -0.6;      // rad
+  double stop_stiffness = 20.0;  // N m/rad
+  double stop_damping = 0.05;    // N m s/rad
 };
 
 class LeverPlant {
@@ -27,7 +32,7 @@ class LeverPlant {
     // clamp costs far less than tanh at 20 evaluations per tick.
     const double slip = speed_ / p_.coulomb_speed;
     const double friction = p_.viscous * speed_ + p_.coulomb * (slip > 1.0 ? 1.0 : slip < -1.0 ? -1.0 : slip);
-    speed_ += (motor_torque_ + external_torque - friction) * dt_over_inertia_;
+    speed_ += (motor_torque_ + external_torque - friction + stop_torque()) * dt_over_inertia_;
     angle_ += speed_ * dt;
   }
 
@@ -44,6 +49,13 @@ class LeverPlant {
 
  private:
   static double clamp(double v, double limit) { return v > limit ? limit : v < -limit ? -limit : v; }
+  // Pushes out of the stop, never pulls into it.
+  double stop_torque() const {
+    const double penetration = p_.stop_angle - angle_;
+    if (penetration <= 0.0) return 0.0;
+    const double push = p_.stop_stiffness * penetration - p_.stop_damping * speed_;
+    return push > 0.0 ? push : 0.0;
+  }
   void prepare(double dt) {
     step_ = dt;
     motor_blend_ = dt / (p_.motor_time_constant + dt);

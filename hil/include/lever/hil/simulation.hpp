@@ -1,22 +1,40 @@
 #pragma once
-// The testbed in simulated time: two levers (the real firmware core, Lever<SimHal>), their plants, the
-// operator, the wall, one CAN bus per site joined by two bridges over a simulated IP link, and injected
-// faults. Deterministic: the same configuration and seed give the same results, bit for bit.
+// The testbed in simulated time: two levers (the real firmware core, HsiLever<SimHal> and TopLever<SimHal>),
+// their plants, the operator, the wall, one CAN bus per site joined by two bridges over a simulated IP link,
+// and injected faults. Before the scenario both levers power up at a random angle, home against their end
+// stop and are armed by the host; the scenario's clock starts when both are armed. Deterministic: the same
+// configuration and seed give the same results, bit for bit.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "lever/codec/config.hpp"
+#include "lever/fw/lever.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/fault_spec.hpp"
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/lever_plant.hpp"
 #include "lever/hil/network.hpp"
+#include "lever/hil/sim_hal.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
 #include "lever/hil/wall.hpp"
 
 namespace lever::hil {
+
+using SimHsi = fw::HsiLever<SimHal>;
+using SimTop = fw::TopLever<SimHal>;
+
+// Both levers after a tick, for tests that check invariants every tick.
+struct SimView {
+  double t = 0.0;     // scenario time; negative before the scenario (power-up, homing)
+  fw::Tick tick = 0;  // the simulation's tick (each lever counts its own from its power-up)
+  const SimHsi& hsi;
+  const SimTop& top;
+  std::uint64_t hsi_rearms_sent = 0;  // re-arm commands the host addressed to each lever so far
+  std::uint64_t top_rearms_sent = 0;
+};
 
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
@@ -26,7 +44,7 @@ struct SimConfig {
   codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};     // TOP -> HSI
   NetworkParams network{};
   std::vector<FaultSpec> faults;
-  double rearm_after_s = 0.3;  // the host re-arms both levers this long after a fault's span ends
+  double rearm_after_s = 0.3;  // the host re-arms (and if need be re-homes) levers this long after a fault's span ends
 
   LeverPlantParams hsi_plant{};
   LeverPlantParams top_plant{};
@@ -35,12 +53,16 @@ struct SimConfig {
   OperatorParams operator_params{};
   fw::LeverConfig hsi_firmware = default_firmware(protocol::Role::hsi);
   fw::LeverConfig top_firmware = default_firmware(protocol::Role::top);
+  // Levers with incremental encoders power up at a random angle and home before the scenario; false: absolute
+  // encoders at the operator's start angle (0.1 rad), armed at once.
+  bool homing = true;
   int substeps = 10;  // physics steps per 1 ms tick
   double bitrate = 1e6;
   double bridge_latency_us = 100.0;  // each bridge's receive-to-send time
   double jnd = 0.10;                 // force_jnd_violation: relative threshold (Weber fraction)...
   double jnd_absolute_n = 0.05;      // ...but never below the absolute detection threshold for force
   bool record_trace = false;
+  std::function<void(const SimView&)> observer;  // called after every tick
 
   static fw::LeverConfig default_firmware(protocol::Role role);
 };
@@ -54,6 +76,7 @@ struct FaultReport {
     std::optional<double> safe_at_s;     // its safe behaviour was in force
     double max_torque_nm_during = 0.0;   // from injection to re-arm
     std::optional<double> rearmed_at_s;  // armed again
+    bool armed_without_rearm = false;    // left the fault state for armed with no re-arm sent since: a bug
   } hsi, top;
 };
 
@@ -76,6 +99,10 @@ struct SimResult {
   std::uint64_t motion_frames = 0, force_frames = 0;
   std::uint64_t network_sent = 0, network_lost = 0, network_reordered = 0;
   std::uint64_t hsi_seq_gaps = 0, top_seq_gaps = 0;
+  double homed_at_s = 0.0;  // simulated time from power-up until both levers were homed and armed
+  std::uint32_t hsi_overruns = 0, top_overruns = 0;
+  std::uint64_t hsi_edges_lost = 0, top_edges_lost = 0;  // the encoder queue overflowed
+  std::uint64_t refresh_frames = 0;                      // of motion_frames + force_frames, sent by the refresh
   double wall_time_s = 0.0;
   double realtime_factor = 0.0;
   std::vector<FaultReport> faults;

@@ -35,7 +35,7 @@ class StrainGaugeModel {
     code = std::round(code);
     if (force_saturated_) code = max_code;
     code = code > max_code ? max_code : code < -max_code - 1.0 ? -max_code - 1.0 : code;
-    reading_ = fw::ForceReading{static_cast<std::int32_t>(code), now, false};
+    reading_ = fw::ForceReading{code, now, false};
   }
 
   // Fault injection: the amplifier stops answering (readings age), or reads at its limit.

@@ -1,18 +1,18 @@
 #pragma once
 // One direction of deadband-coded data (HSI velocity, or TOP force) on top of the codec: sequence numbers,
-// the periodic refresh that heals a lost update, and coherent parameter changes.
+// the periodic refresh that heals a lost update, stream restarts, and coherent parameter changes.
 #include <cstdint>
 #include <optional>
 
 #include "lever/codec/codec.hpp"
 #include "lever/fw/link.hpp"
+#include "lever/fw/tick.hpp"
+#include "lever/protocol/messages.hpp"
 
 namespace lever::fw {
 
 template <typename WireInt>
 using WireQuantizer = codec::FixedPointQuantizer<double, WireInt>;
-
-inline constexpr double kSecondsPerTick = 1e-3;
 
 // The codec runs in tick units: integer-valued doubles make every time difference exact, so the predictor's
 // slope and extrapolation come out bit-identical at both ends even though the receiver only knows the
@@ -33,6 +33,7 @@ class DataSender {
     bool send = false;
     bool saturated = false;
     bool refresh = false;  // sent because of the refresh period (or a reconfiguration), not the deadband
+    bool restart = false;  // the first sample of a new stream
     WireInt code = 0;
     std::uint8_t seq = 0;
     codec::Mode mode = codec::Mode::deadband;
@@ -51,10 +52,11 @@ class DataSender {
     sender_.reconfigure(in_tick_units(config));
     force_next_ = true;
   }
-  // Start a fresh stream (arming): the next sample is transmitted.
+  // Start a fresh stream (arming): the next sample is transmitted, flagged as a restart.
   constexpr void restart() noexcept {
     sender_.reset();
     force_next_ = true;
+    restart_next_ = true;
   }
 
   Output offer(Tick now, double value) noexcept {
@@ -63,9 +65,10 @@ class DataSender {
     Output out;
     if (!d.send) return out;
     // Whether the deadband alone would have sent is not known once forced; a forced send is a refresh.
-    out = {true, d.saturated, refresh_due, d.wire[0], seq_++, config_.mode};
+    out = {true, d.saturated, refresh_due, restart_next_, d.wire[0], seq_++, config_.mode};
     last_sent_ = now;
     force_next_ = false;
+    restart_next_ = false;
     return out;
   }
 
@@ -75,6 +78,7 @@ class DataSender {
   Tick refresh_period_;
   Tick last_sent_ = 0;
   bool force_next_ = true;
+  bool restart_next_ = true;
   std::uint8_t seq_ = 0;
 };
 
@@ -83,28 +87,51 @@ class DataSender {
 template <typename WireInt>
 class DataReceiver {
  public:
+  using Receiver = codec::DeadbandReceiver<double, 1, WireQuantizer<WireInt>>;
+
   explicit constexpr DataReceiver(WireQuantizer<WireInt> quantizer) : receiver_(codec::Mode::deadband, quantizer) {}
 
-  // Returns false when the frame must not be used (duplicate or reordered).
-  bool accept(Tick now, std::uint16_t tick, std::uint8_t seq, codec::Mode mode, WireInt code) noexcept {
-    if (sequence_.observe(seq) == SequenceTracker::Verdict::stale) return false;
-    const Tick sender_tick = unwrapper_.unwrap(tick);
-    if (receiver_.model().samples_held() > 0 && !(sender_tick > newest_tick_)) {
-      // The sender's clock went back (it restarted): its old samples say nothing about the new stream.
-      receiver_.reset();
+  // Returns false when the frame must not be used (duplicate or reordered). A new stream is recognized before
+  // any staleness check: a rebooted sender starts its sequence numbers anywhere, and judging them against the
+  // old stream dropped up to 127 of its frames while the watchdog counted it alive.
+  bool accept(Tick now, std::uint16_t tick, std::uint8_t seq, const protocol::DataFlags& flags, WireInt code) noexcept {
+    // A restart frame seen twice (a duplicated datagram) is not a second restart.
+    const bool repeated_restart = flags.restart && restart_seen_ && seq == restart_seq_ && tick == restart_tick_;
+    if (repeated_restart) {
+      sequence_.observe(seq);  // counted as the duplicate it is
+      return false;
     }
-    newest_tick_ = sender_tick;
+    if (flags.restart) {
+      restart_seen_ = true;
+      restart_seq_ = seq;
+      restart_tick_ = tick;
+    }
+    if (flags.restart || restart_pending_) restart_stream();
+    if (sequence_.observe(seq) == SequenceTracker::Verdict::stale) return false;
+    const auto t = unwrapper_.unwrap(tick);
+    // No restart frame, yet the sender's clock did not advance: it restarted and that frame was lost.
+    if (t.restarted) receiver_.reset();
+    newest_tick_ = t.tick;
     arrival_ = now;
-    receiver_.set_mode(mode);
-    receiver_.receive(static_cast<double>(sender_tick), {code});
+    expired_ = false;
+    receiver_.set_mode(flags.mode);
+    receiver_.receive(static_cast<double>(t.tick), {code});
     return true;
   }
+
+  // The peer said (heartbeat) that it is not armed: whatever it sends next begins a new stream, even if its
+  // restart frame is lost.
+  constexpr void peer_stopped() noexcept { restart_pending_ = true; }
+
+  // This lever (re)armed: nothing received before shows until the next frame. The samples themselves stay,
+  // so a peer whose stream went on meanwhile stays coherent with this end.
+  constexpr void expire() noexcept { expired_ = true; }
 
   // The reconstructed value at local tick `now`; nothing before the first sample, and nothing once the
   // newest sample is older than max_age: a sender that stopped (disarmed, faulted) while its heartbeats go on
   // must not leave the receiver holding, or worse extrapolating, its last value forever.
   std::optional<double> value_at(Tick now, Tick max_age) const noexcept {
-    if (now - arrival_ > max_age) return std::nullopt;
+    if (expired_ || now - arrival_ > max_age) return std::nullopt;
     const auto v = receiver_.reconstruct(static_cast<double>(newest_tick_ + (now - arrival_)));
     if (!v) return std::nullopt;
     return (*v)[0];
@@ -113,16 +140,30 @@ class DataReceiver {
   constexpr const SequenceTracker& sequence() const noexcept { return sequence_; }
   constexpr Tick last_arrival() const noexcept { return arrival_; }
   constexpr bool has_value() const noexcept { return !receiver_.model().empty(); }
-  constexpr const codec::DeadbandReceiver<double, 1, WireQuantizer<WireInt>>& codec_receiver() const noexcept {
-    return receiver_;
-  }
+  constexpr std::uint32_t restarts() const noexcept { return restarts_; }
+  constexpr const Receiver& codec_receiver() const noexcept { return receiver_; }
 
  private:
-  codec::DeadbandReceiver<double, 1, WireQuantizer<WireInt>> receiver_;
+  constexpr void restart_stream() noexcept {
+    sequence_.restart();
+    unwrapper_.reset();
+    receiver_.reset();
+    restart_pending_ = false;
+    expired_ = true;
+    ++restarts_;
+  }
+
+  Receiver receiver_;
   SequenceTracker sequence_;
   TickUnwrapper unwrapper_;
   Tick newest_tick_ = 0;
   Tick arrival_ = 0;
+  std::uint32_t restarts_ = 0;
+  std::uint16_t restart_tick_ = 0;
+  std::uint8_t restart_seq_ = 0;
+  bool restart_seen_ = false;
+  bool restart_pending_ = false;
+  bool expired_ = true;
 };
 
 }  // namespace lever::fw

@@ -111,8 +111,8 @@ concept HasPorts = requires(H& h) {
 
 // A board: one port of each kind.
 template <typename H>
-concept LeverHal = HasPorts<H> && EncoderPort<EncoderOf<H>> && ForcePort<ForceOf<H>> && MotorPort<MotorOf<H>> &&
-                   CanPort<CanOf<H>>;
+concept LeverHal =
+    HasPorts<H> && EncoderPort<EncoderOf<H>> && ForcePort<ForceOf<H>> && MotorPort<MotorOf<H>> && CanPort<CanOf<H>>;
 
 // Optional: a monotonic nanosecond clock, with which the core measures how long each step() takes. Boards
 // have one; the HIL's simulated time has none worth measuring.

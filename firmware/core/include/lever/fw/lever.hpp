@@ -1,80 +1,75 @@
 #pragma once
-// The lever application for both roles, advanced by step(now) once per 1 ms tick. No heap, no exceptions,
-// no OS: everything it touches comes through the HAL (hal.hpp).
+// The lever application, advanced by step(now) once per 1 ms tick: what both roles share (sensors, homing,
+// the link, the supervisor, safety, the torque clamp, heartbeats), with the role's own behaviour (HsiRole,
+// TopRole) as a compile-time policy, so the 1 kHz path has no role branches. No heap, no exceptions, no OS:
+// everything it touches comes through the HAL (hal.hpp).
 //
-// Per tick: read sensors -> take frames from the bus -> find faults -> control by role and state -> clamp
-// torque -> command the motor -> transmit data and heartbeat.
+// Per tick: timing -> sensors -> frames from the bus -> faults -> control by state (homing, armed: the role,
+// fault: the safe behaviour) -> clamp torque -> command the motor -> data and heartbeat out.
 #include <cstdint>
-#include <numbers>
 #include <optional>
 
 #include "lever/fw/controllers.hpp"
-#include "lever/fw/data_channel.hpp"
-#include "lever/fw/faults.hpp"
+#include "lever/fw/encoder_position.hpp"
 #include "lever/fw/hal.hpp"
+#include "lever/fw/homing.hpp"
+#include "lever/fw/hsi_role.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/fw/link.hpp"
 #include "lever/fw/quadrature_decoder.hpp"
+#include "lever/fw/step_timing.hpp"
 #include "lever/fw/strain_gauge.hpp"
 #include "lever/fw/supervisor.hpp"
+#include "lever/fw/telemetry.hpp"
+#include "lever/fw/top_role.hpp"
 #include "lever/fw/velocity_estimator.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::fw {
 
-struct LeverCounters {
-  std::uint32_t rx_frames = 0;    // frames for this pair, decoded
-  std::uint32_t rx_rejected = 0;  // frames for this pair that failed to decode
-  std::uint32_t rx_stale = 0;     // duplicate or reordered data frames, not used
-  std::uint32_t tx_frames = 0;
-  std::uint32_t tx_dropped = 0;         // the CAN queue was full
-  std::uint32_t data_sent = 0;          // deadband data frames sent
-  std::uint32_t commands_rejected = 0;  // commands refused by the supervisor or with invalid parameters
-};
-
-struct LeverTelemetry {
-  double position_rad = 0.0;
-  double velocity_rad_s = 0.0;
-  std::optional<double> force_n;  // own strain gauge, calibrated; empty when stale
-  std::optional<double> remote;   // reconstructed peer value: HSI velocity at the TOP, force at the HSI
-  double position_ref_rad = 0.0;  // TOP tracking reference
-  double velocity_ref_rad_s = 0.0;
-  double torque_demand_nm = 0.0;  // before the limit
-  double torque_nm = 0.0;         // commanded
-  bool motor_enabled = false;
-  bool sent_data = false;  // this tick
-};
-
-template <LeverHal H>
+template <LeverHal H, typename Role>
 class Lever {
  public:
-  using MotionSender = DataSender<std::int16_t>;
-  using ForceSender = DataSender<std::int32_t>;
+  using role_type = Role;
 
   Lever(H& hal, const LeverConfig& config) noexcept
       : hal_(hal),
-        config_(config),
+        config_(with_role(config)),
         decoder_(config.decoder),
+        counter_(config.counter_bits),
+        position_(config.counts_per_rev, config.homing.method == HomingMethod::absolute),
         velocity_(config.velocity),
         gauge_(config.gauge),
-        position_ctrl_(config.position),
-        display_(config.display),
-        motion_tx_(config.motion_codec, velocity_quantizer(), config.refresh_period),
-        force_tx_(config.force_codec, force_quantizer(), config.refresh_period),
-        motion_rx_(velocity_quantizer()),
-        force_rx_(force_quantizer()) {}
+        homing_(config.homing),
+        timing_(config.timing),
+        role_(config),
+        uses_gauge_(Role::uses_gauge(config)) {}
 
   void step(Tick now) noexcept {
-    const double dt = started_ && now > last_step_ ? static_cast<double>(now - last_step_) * kSecondsPerTick : 0.0;
-    started_ = true;
-    last_step_ = now;
+    std::uint64_t started_ns = 0;
+    if constexpr (HasStepClock<H>) started_ns = hal_.monotonic_ns();
+    const Tick interval = timing_.begin(now);
+    // The estimator integrates the true interval (it is stable for any); controllers integrate at most the
+    // hard bound, past which the TIMING fault takes the lever down anyway.
+    const Tick bounded = interval < config_.timing.fault_after ? interval : config_.timing.fault_after;
+    const double dt = static_cast<double>(bounded) * kSecondsPerTick;
     telemetry_.sent_data = false;
+    telemetry_.sent_refresh = false;
 
-    read_sensors(now, dt);
+    read_sensors(now, static_cast<double>(interval) * kSecondsPerTick);
     receive_frames(now);
     supervisor_.boot_complete();
-    if (supervisor_.state() == LeverState::armed || supervisor_.state() == LeverState::fault) {
-      supervisor_.report(active_faults(now), now);
+    switch (supervisor_.state()) {
+      case LeverState::armed:
+      case LeverState::fault:
+        supervisor_.report(active_faults(now), now);
+        break;
+      case LeverState::homing:
+        supervisor_.report(homing_faults(), now);
+        break;
+      case LeverState::init:
+      case LeverState::disarmed:
+        break;
     }
     const double demand = control(now, dt);
     apply_torque(demand);
@@ -83,6 +78,7 @@ class Lever {
       transmit_heartbeat();
       next_heartbeat_ = now + config_.heartbeat_period;
     }
+    if constexpr (HasStepClock<H>) timing_.step_took(hal_.monotonic_ns() - started_ns);
   }
 
   const LeverConfig& config() const noexcept { return config_; }
@@ -91,24 +87,24 @@ class Lever {
   const LeverCounters& counters() const noexcept { return counters_; }
   const QuadratureDecoder& decoder() const noexcept { return decoder_; }
   const StrainGauge& gauge() const noexcept { return gauge_; }
-  const MotionSender& motion_sender() const noexcept { return motion_tx_; }
-  const ForceSender& force_sender() const noexcept { return force_tx_; }
-  const DataReceiver<std::int16_t>& motion_receiver() const noexcept { return motion_rx_; }
-  const DataReceiver<std::int32_t>& force_receiver() const noexcept { return force_rx_; }
+  const VelocityEstimator& velocity_estimator() const noexcept { return velocity_; }
+  const EncoderPosition& position() const noexcept { return position_; }
+  const StepTiming& timing() const noexcept { return timing_; }
+  const Role& role() const noexcept { return role_; }
 
-  // Faults whose conditions hold now (what arm and re-arm check).
+  // Faults whose conditions hold now (what arm and re-arm check, and what ends an armed run).
   FaultBits active_faults(Tick now) const noexcept {
-    FaultBits f = 0;
+    FaultBits f = homing_faults();
     if (watchdog_.silent(now, config_.comms_timeout)) f |= bit(Fault::comms_timeout);
-    if (decoder_.fault()) f |= bit(Fault::encoder);
-    if (uses_gauge()) {
+    if (uses_gauge_) {
       if (gauge_.state().stale) f |= bit(Fault::force_stale);
       if (gauge_.state().saturated) f |= bit(Fault::force_saturated);
     }
-    if (hal_.motor().driver_fault()) f |= bit(Fault::motor_driver);
     if (saturated_ticks_ > config_.torque_saturation_ticks) f |= bit(Fault::torque_limit);
-    if (telemetry_.position_rad < config_.position_min_rad || telemetry_.position_rad > config_.position_max_rad)
+    if (position_.valid() &&
+        (telemetry_.position_rad < config_.position_min_rad || telemetry_.position_rad > config_.position_max_rad))
       f |= bit(Fault::position_limit);
+    if (supervisor_.armed() && peer_left_) f |= bit(Fault::peer_state);
     return f;
   }
 
@@ -116,35 +112,43 @@ class Lever {
   static constexpr std::size_t kMaxEdgesPerRead = 64;
   static constexpr std::size_t kMaxFramesPerTick = 16;  // bounds the loop; the rest waits for the next tick
 
-  static constexpr WireQuantizer<std::int16_t> velocity_quantizer() noexcept { return {protocol::kVelocityLsb}; }
-  static constexpr WireQuantizer<std::int32_t> force_quantizer() noexcept {
-    return {protocol::kForceLsb, protocol::kForceCodeMin, protocol::kForceCodeMax};
+  static LeverConfig with_role(LeverConfig c) noexcept {
+    c.role = Role::kRole;
+    return c;
   }
-  static constexpr WireQuantizer<std::int16_t> position_quantizer() noexcept { return {protocol::kPositionLsbRad}; }
 
-  bool is_hsi() const noexcept { return config_.role == protocol::Role::hsi; }
-  // Two refresh periods without data: the sender has stopped, not merely stayed inside its deadband.
-  Tick stale_after() const noexcept { return 2 * config_.refresh_period; }
-  bool uses_gauge() const noexcept { return !is_hsi() || (config_.use_force_sensor && config_.display.closed_loop); }
+  // The faults that matter while the lever drives itself, without a peer: homing and armed alike.
+  FaultBits homing_faults() const noexcept {
+    FaultBits f = 0;
+    if (decoder_.fault()) f |= bit(Fault::encoder);
+    if (hal_.motor().driver_fault()) f |= bit(Fault::motor_driver);
+    if (timing_.violated()) f |= bit(Fault::timing);
+    return f;
+  }
 
   void read_sensors(Tick now, double dt) noexcept {
     auto& encoder = hal_.encoder();
-    std::int32_t counts = 0;
+    std::int64_t counts = 0;
     if constexpr (EdgeEncoderPort<EncoderOf<H>>) {
-      AbState edges[kMaxEdgesPerRead];
-      // Bounded: at 10k edges/s a tick brings about 10 edges; a flood is cut at a few reads.
+      EncoderEdge edges[kMaxEdgesPerRead];
+      // Bounded: at 10k edges/s a tick brings about 10 edges; a flood is cut at a few reads and waits.
       for (int read = 0; read < 8; ++read) {
-        const std::size_t n = encoder.drain_edges(edges, kMaxEdgesPerRead);
-        for (std::size_t i = 0; i < n; ++i) decoder_.feed(edges[i]);
-        if (n < kMaxEdgesPerRead) break;
+        const EdgeDrain drained = encoder.drain_edges(edges, kMaxEdgesPerRead);
+        decoder_.note_lost(drained.lost);
+        for (std::size_t i = 0; i < drained.count; ++i) decoder_.feed(edges[i]);
+        if (drained.count < kMaxEdgesPerRead) break;
       }
       counts = decoder_.counts();
+      if (const auto index = decoder_.take_index()) index_raw_angle_ = position_.raw_angle_at(*index);
     } else {
-      counts = encoder.read_counts();
+      counts = counter_.update(encoder.read_counts());
     }
-    telemetry_.position_rad = static_cast<double>(counts) * (2.0 * std::numbers::pi / config_.counts_per_rev);
-    if (dt > 0.0) telemetry_.velocity_rad_s = velocity_.update(telemetry_.position_rad, dt);
-    if (uses_gauge()) telemetry_.force_n = gauge_.update(hal_.force().latest(), now);
+    position_.update(counts);
+    if (decoder_.fault()) position_.invalidate();  // until homed again (or, absolute, until the fault clears)
+    telemetry_.position_rad = position_.position();
+    telemetry_.position_valid = position_.valid();
+    if (dt > 0.0) telemetry_.velocity_rad_s = velocity_.update(position_.raw_angle(), dt);
+    if (uses_gauge_) telemetry_.force_n = gauge_.update(hal_.force().latest(), now);
   }
 
   void receive_frames(Tick now) noexcept {
@@ -156,33 +160,24 @@ class Lever {
     protocol::FrameAddress address;
     if (protocol::classify(frame.id, address) != protocol::DecodeError::none || address.pair != config_.pair)
       return;  // another pair's or another protocol's traffic on a shared bus
-    const protocol::Role peer = is_hsi() ? protocol::Role::top : protocol::Role::hsi;
     protocol::DecodeError error = protocol::DecodeError::none;
-    switch (address.kind) {
-      case protocol::MessageKind::motion: {
-        protocol::MotionMessage m;
-        error = protocol::decode(frame, m, address);
-        if (error == protocol::DecodeError::none && !is_hsi()) on_motion(m, now);
-        break;
+    if (address.kind == Role::kReceives) {
+      bool used = false;
+      error = role_.receive(frame, now, used);
+      if (error == protocol::DecodeError::none) {
+        watchdog_.heard(now);
+        if (!used) ++counters_.rx_stale;
       }
-      case protocol::MessageKind::force: {
-        protocol::ForceMessage m;
-        error = protocol::decode(frame, m, address);
-        if (error == protocol::DecodeError::none && is_hsi()) on_force(m, now);
-        break;
-      }
-      case protocol::MessageKind::heartbeat: {
-        protocol::HeartbeatMessage m;
-        error = protocol::decode(frame, m, address);
-        if (error == protocol::DecodeError::none && address.role == peer) watchdog_.heard(now);
-        break;
-      }
-      case protocol::MessageKind::command: {
-        protocol::CommandMessage m;
-        error = protocol::decode(frame, m, address);
-        if (error == protocol::DecodeError::none) on_command(m, now);
-        break;
-      }
+    } else if (address.kind == protocol::MessageKind::heartbeat) {
+      protocol::HeartbeatMessage m;
+      error = protocol::decode(frame, m, address);
+      if (error == protocol::DecodeError::none && address.role == Role::kPeer) on_peer_heartbeat(m, now);
+    } else if (address.kind == protocol::MessageKind::command) {
+      protocol::CommandMessage m;
+      error = protocol::decode(frame, m, address);
+      if (error == protocol::DecodeError::none && Role::addressed(m)) on_command(m, now);
+    } else {
+      return;  // this lever's own kind of data frame, from another node: not for it
     }
     if (error != protocol::DecodeError::none) {
       ++counters_.rx_rejected;
@@ -191,156 +186,168 @@ class Lever {
     }
   }
 
-  void on_motion(const protocol::MotionMessage& m, Tick now) noexcept {
+  // The peer's state, as it says: a peer that was armed alongside this lever and no longer is (disarmed,
+  // faulted, rebooted faster than the comms timeout) ends the pair's run; and whatever it sends next is a
+  // new stream.
+  void on_peer_heartbeat(const protocol::HeartbeatMessage& m, Tick now) noexcept {
     watchdog_.heard(now);
-    if (!motion_rx_.accept(now, m.tick, m.seq, m.flags.mode, m.velocity)) {
-      ++counters_.rx_stale;
+    if (m.state == LeverState::armed) {
+      if (supervisor_.armed()) peer_seen_armed_ = true;
       return;
     }
-    // The position rides on every velocity frame and resets the integrated reference (paper section III-A).
-    telemetry_.position_ref_rad = position_quantizer().decode(m.position);
-    have_motion_ = true;
-  }
-
-  void on_force(const protocol::ForceMessage& m, Tick now) noexcept {
-    watchdog_.heard(now);
-    if (!force_rx_.accept(now, m.tick, m.seq, m.flags.mode, m.force)) ++counters_.rx_stale;
+    role_.receiver().peer_stopped();
+    if (supervisor_.armed() && peer_seen_armed_) peer_left_ = true;
   }
 
   void on_command(const protocol::CommandMessage& m, Tick now) noexcept {
-    if (!(is_hsi() ? m.to_hsi : m.to_top)) return;
     bool accepted = true;
     switch (m.opcode) {
       case protocol::Opcode::arm:
-        accepted = supervisor_.arm(active_faults(now));
+        accepted = position_.valid() && supervisor_.arm(active_faults(now));
         if (accepted) on_armed();
         break;
       case protocol::Opcode::rearm:
         if (supervisor_.state() == LeverState::fault || supervisor_.state() == LeverState::disarmed) {
-          // Conditions that only the fault itself kept alive restart with the re-arm.
-          decoder_.clear_fault();
+          // Conditions that only the fault itself kept alive restart with the re-arm. The encoder's count
+          // stays invalid after an encoder fault (the lever must home again), unless it is absolute.
+          clear_encoder_fault();
           saturated_ticks_ = 0;
         }
-        accepted = supervisor_.rearm(active_faults(now));
+        accepted = position_.valid() && supervisor_.rearm(active_faults(now));
         if (accepted) on_armed();
         break;
       case protocol::Opcode::disarm:
         accepted = supervisor_.disarm();
         break;
       case protocol::Opcode::tare:
-        accepted = !supervisor_.armed() && uses_gauge();
+        accepted = !supervisor_.armed() && uses_gauge_;
         if (accepted) gauge_.start_tare();
         break;
       case protocol::Opcode::set_deadband: {
         const codec::Config<double> c{m.mode, m.p * protocol::kPLsb, m.floor * protocol::kFloorLsb,
                                       m.filter_hz * protocol::kFilterHzLsb};
-        accepted = codec::is_valid(c);
         // Only the sending end of a direction owns its parameters; the receiving end follows the mode flag
         // carried by the data frames, which switches it at the same sample.
-        if (accepted && m.direction == protocol::Direction::motion && is_hsi()) motion_tx_.reconfigure(c);
-        if (accepted && m.direction == protocol::Direction::force && !is_hsi()) force_tx_.reconfigure(c);
+        accepted = codec::is_valid(c) && m.direction == Role::kSends;
+        if (accepted) role_.reconfigure(c);
         break;
       }
+      case protocol::Opcode::home:
+        if (homing_.needed() &&
+            (supervisor_.state() == LeverState::disarmed || supervisor_.state() == LeverState::fault)) {
+          clear_encoder_fault();
+          position_.invalidate();  // whatever the count said, homing is what makes it mean something
+        }
+        accepted = homing_.needed() && supervisor_.home(homing_faults());
+        if (accepted) {
+          homing_.start(now, position_.raw_angle());
+          index_raw_angle_.reset();
+        }
+        break;
     }
     if (!accepted) ++counters_.commands_rejected;
   }
 
-  void on_armed() noexcept {
-    motion_tx_.restart();
-    force_tx_.restart();
-    display_.reset();
-    // Until the HSI's motion arrives, the TOP holds where it is.
-    telemetry_.position_ref_rad = telemetry_.position_rad;
-    telemetry_.velocity_ref_rad_s = 0.0;
-    have_motion_ = false;
+  void clear_encoder_fault() noexcept {
+    decoder_.clear_fault();
+    if (!homing_.needed()) position_.reference(0.0, 0.0);  // absolute: the count is the position again
   }
 
-  // Torque demand for this tick, by role and state.
+  void on_armed() noexcept {
+    role_.on_armed(telemetry_);
+    peer_seen_armed_ = false;
+    peer_left_ = false;
+  }
+
+  // Torque demand for this tick, by state.
   double control(Tick now, double dt) noexcept {
     telemetry_.remote.reset();
-    if (supervisor_.state() == LeverState::fault) return safe_behaviour(now);
-    if (!supervisor_.armed()) return 0.0;
-
-    if (is_hsi()) {
-      telemetry_.remote = force_rx_.value_at(now, stale_after());
-      const double remote_force = telemetry_.remote.value_or(0.0);
-      const double* own = telemetry_.force_n ? &*telemetry_.force_n : nullptr;
-      return display_.update(remote_force, own, telemetry_.velocity_rad_s, dt);
+    switch (supervisor_.state()) {
+      case LeverState::armed:
+        return role_.control(now, dt, telemetry_);
+      case LeverState::fault:
+        return safe_behaviour(now);
+      case LeverState::homing:
+        return homing_step(now, dt);
+      case LeverState::init:
+      case LeverState::disarmed:
+        break;
     }
-    if (have_motion_) {
-      // A stale stream leaves the reference where it was: the TOP holds instead of integrating old motion.
-      telemetry_.remote = motion_rx_.value_at(now, stale_after());
-      telemetry_.velocity_ref_rad_s = telemetry_.remote.value_or(0.0);
-      if (now != motion_rx_.last_arrival()) telemetry_.position_ref_rad += telemetry_.velocity_ref_rad_s * dt;
-    }
-    return position_ctrl_.update(telemetry_.position_ref_rad, telemetry_.velocity_ref_rad_s, telemetry_.position_rad,
-                                 telemetry_.velocity_rad_s);
+    return 0.0;
   }
 
-  // TOP: hold the position where the fault struck, with limited torque, while the encoder and driver can be
-  // trusted, then let go. HSI: display nothing.
+  double homing_step(Tick now, double dt) noexcept {
+    const auto out = homing_.update(now, position_.raw_angle(), telemetry_.velocity_rad_s, index_raw_angle_, dt);
+    index_raw_angle_.reset();
+    switch (out.status) {
+      case Homing::Status::done:
+        position_.reference(homing_.reference_raw_angle(), config_.homing.home_position_rad);
+        telemetry_.position_rad = position_.position();
+        telemetry_.position_valid = true;
+        supervisor_.homing_done();
+        return 0.0;
+      case Homing::Status::failed:
+        supervisor_.report(bit(Fault::homing), now);
+        return 0.0;
+      case Homing::Status::running:
+        break;
+    }
+    return out.torque_nm;
+  }
+
+  // The TOP holds the position where the fault struck, with limited torque, while the encoder and driver
+  // can be trusted, then lets go. The HSI displays nothing.
   double safe_behaviour(Tick now) noexcept {
-    if (now == supervisor_.fault_since()) hold_position_ = telemetry_.position_rad;
-    const FaultBits latched = supervisor_.latched();
-    const bool can_hold = !is_hsi() && !has(latched, Fault::encoder) && !has(latched, Fault::motor_driver) &&
-                          now - supervisor_.fault_since() < config_.safe_hold_ticks;
-    if (!can_hold) return 0.0;
-    const double torque = config_.position.kp * (hold_position_ - telemetry_.position_rad) -
-                          config_.position.kd * telemetry_.velocity_rad_s;
-    return clamp_torque(torque, config_.safe_hold_torque_nm);
+    if constexpr (Role::kHoldsOnFault) {
+      if (now == supervisor_.fault_since()) hold_position_ = telemetry_.position_rad;
+      const FaultBits latched = supervisor_.latched();
+      const bool can_hold = position_.valid() && !has(latched, Fault::encoder) && !has(latched, Fault::motor_driver) &&
+                            !has(latched, Fault::timing) && now - supervisor_.fault_since() < config_.safe_hold_ticks;
+      if (!can_hold) return 0.0;
+      const double torque = config_.position.kp * (hold_position_ - telemetry_.position_rad) -
+                            config_.position.kd * telemetry_.velocity_rad_s;
+      return clamp_torque(torque, config_.safe_hold_torque_nm);
+    } else {
+      (void)now;
+      return 0.0;
+    }
   }
 
   void apply_torque(double demand) noexcept {
     telemetry_.torque_demand_nm = demand;
     const bool over = !(demand == demand) || demand > config_.torque_limit_nm || demand < -config_.torque_limit_nm;
     saturated_ticks_ = supervisor_.armed() && over ? saturated_ticks_ + 1 : 0;
-    const bool holding = supervisor_.state() == LeverState::fault && demand != 0.0;
-    const bool enable = supervisor_.armed() || holding;
+    const LeverState state = supervisor_.state();
+    const bool active = (state == LeverState::fault || state == LeverState::homing) && demand != 0.0;
+    const bool enable = supervisor_.armed() || active;
     telemetry_.torque_nm = enable ? clamp_torque(demand, config_.torque_limit_nm) : 0.0;
     telemetry_.motor_enabled = enable;
     hal_.motor().command({telemetry_.torque_nm, enable});
   }
 
   void transmit_data(Tick now) noexcept {
-    const auto tick16 = static_cast<std::uint16_t>(now & 0xFFFFu);
-    if (is_hsi()) {
-      const auto out = motion_tx_.offer(now, telemetry_.velocity_rad_s);
-      if (!out.send) return;
-      bool position_saturated = false;
-      protocol::MotionMessage m;
-      m.position = position_quantizer().encode(telemetry_.position_rad, position_saturated);
-      m.velocity = out.code;
-      m.tick = tick16;
-      m.seq = out.seq;
-      m.flags = {position_saturated, out.saturated, out.refresh, out.mode};
-      send(protocol::pack(m, config_.pair));
-    } else {
-      if (!telemetry_.force_n) return;  // stale gauge: the supervisor is already taking the lever down
-      const auto out = force_tx_.offer(now, *telemetry_.force_n);
-      if (!out.send) return;
-      protocol::ForceMessage m;
-      m.force = out.code;
-      m.tick = tick16;
-      m.seq = out.seq;
-      m.flags = {out.saturated, false, out.refresh, out.mode};
-      send(protocol::pack(m, config_.pair));
-    }
+    const auto out = role_.transmit(now, telemetry_, config_.pair);
+    if (!out) return;
+    send(out->frame);
     ++counters_.data_sent;
+    if (out->refresh) ++counters_.refresh_sent;
     telemetry_.sent_data = true;
+    telemetry_.sent_refresh = out->refresh;
   }
 
   void transmit_heartbeat() noexcept {
     const auto saturate = [](std::uint32_t v) { return static_cast<std::uint8_t>(v > 255 ? 255 : v); };
-    const auto& rx_seq = is_hsi() ? force_rx_.sequence() : motion_rx_.sequence();
     protocol::HeartbeatMessage m;
     m.state = supervisor_.state();
+    m.position_valid = position_.valid();
     m.faults = supervisor_.latched();
-    m.last_data_seq = is_hsi() ? motion_tx_.last_seq() : force_tx_.last_seq();
-    m.seq_gaps = saturate(rx_seq.missing());
+    m.last_data_seq = role_.sender().last_seq();
+    m.seq_gaps = saturate(role_.receiver().sequence().missing());
     m.rejected_frames = saturate(counters_.rx_rejected);
     m.counter = heartbeat_counter_++;
-    m.encoder_errors = saturate(decoder_.illegal_transitions());
-    send(protocol::pack(m, config_.pair, config_.role));
+    const std::uint32_t encoder_errors = decoder_.illegal_transitions() + decoder_.lost_edges();
+    m.encoder_errors = saturate(encoder_errors < decoder_.lost_edges() ? UINT32_MAX : encoder_errors);
+    send(protocol::pack(m, config_.pair, Role::kRole));
   }
 
   void send(const protocol::CanFrame& frame) noexcept {
@@ -355,24 +362,29 @@ class Lever {
   LeverConfig config_;
   Supervisor supervisor_;
   QuadratureDecoder decoder_;
+  CounterUnwrapper counter_;
+  EncoderPosition position_;
   VelocityEstimator velocity_;
   StrainGauge gauge_;
-  PositionController position_ctrl_;
-  ForceDisplay display_;
-  MotionSender motion_tx_;
-  ForceSender force_tx_;
-  DataReceiver<std::int16_t> motion_rx_;
-  DataReceiver<std::int32_t> force_rx_;
+  Homing homing_;
+  StepTiming timing_;
+  Role role_;
   Watchdog watchdog_;
   LeverTelemetry telemetry_;
   LeverCounters counters_;
-  Tick last_step_ = 0;
+  std::optional<double> index_raw_angle_;
   Tick next_heartbeat_ = 0;
   Tick saturated_ticks_ = 0;
   double hold_position_ = 0.0;
-  bool started_ = false;
-  bool have_motion_ = false;
+  bool uses_gauge_;
+  bool peer_seen_armed_ = false;
+  bool peer_left_ = false;
   std::uint8_t heartbeat_counter_ = 0;
 };
+
+template <LeverHal H>
+using HsiLever = Lever<H, HsiRole>;
+template <LeverHal H>
+using TopLever = Lever<H, TopRole>;
 
 }  // namespace lever::fw

@@ -1,12 +1,16 @@
 #pragma once
 // Everything that makes a lever an HSI or a TOP, as data. Defaults describe the testbed's levers; the HIL
 // and the board runner load their own.
+#include <cmath>
 #include <cstdint>
 
 #include "lever/codec/config.hpp"
 #include "lever/fw/controllers.hpp"
+#include "lever/fw/homing.hpp"
 #include "lever/fw/quadrature_decoder.hpp"
+#include "lever/fw/step_timing.hpp"
 #include "lever/fw/strain_gauge.hpp"
+#include "lever/fw/tick.hpp"
 #include "lever/fw/velocity_estimator.hpp"
 #include "lever/protocol/messages.hpp"
 
@@ -16,9 +20,10 @@ struct LeverConfig {
   protocol::Role role = protocol::Role::hsi;
   std::uint8_t pair = 0;  // 0..15, selects the CAN ids
 
-  // Link: silence is not loss.
-  Tick heartbeat_period = 50;  // 20 Hz
-  Tick comms_timeout = 50;     // peer silent longer than this latches COMMS
+  // Link: silence is not loss. The timeout spans four heartbeats, so one late or lost heartbeat never latches
+  // COMMS (a timeout equal to the period did, at rest, on the first late one).
+  Tick heartbeat_period = 25;  // 40 Hz
+  Tick comms_timeout = 100;    // peer silent longer than this latches COMMS
   Tick refresh_period = 100;   // the data sender transmits at least this often, so a lost update heals
 
   // Deadband per direction (cut-off in Hz). Only the sending end of a direction uses its codec config.
@@ -30,10 +35,15 @@ struct LeverConfig {
 
   // Sensors.
   double counts_per_rev = 16384.0;  // 4096 lines read x4
+  std::uint8_t counter_bits = 32;   // width of a hardware counter (CountingEncoderPort); edge ports ignore it
   QuadratureDecoder::Config decoder{};
   VelocityEstimator::Config velocity{};
   StrainGauge::Config gauge{};
   bool use_force_sensor = true;  // TOP: the contact force; HSI: only for closed-loop force display
+  Homing::Config homing{};       // method absolute: the encoder needs no homing
+
+  // Timing.
+  StepTiming::Config timing{};
 
   // Control.
   PositionController::Config position{};
@@ -42,17 +52,22 @@ struct LeverConfig {
   // Safety.
   double torque_limit_nm = 1.0;        // never exceeded, whatever arrives on the bus
   Tick torque_saturation_ticks = 250;  // demand above the limit this long is a fault
-  double position_min_rad = -1.0;
+  double position_min_rad = -1.0;      // checked only while the position is valid
   double position_max_rad = 1.0;
   double safe_hold_torque_nm = 0.3;  // TOP after a fault: hold position with at most this torque...
   Tick safe_hold_ticks = 500;        // ...for this long, then zero torque
 };
 
 constexpr bool is_valid(const LeverConfig& c) noexcept {
+  const auto& h = c.homing;
   return c.pair < protocol::kPairCount && c.heartbeat_period > 0 && c.comms_timeout > 0 && c.refresh_period > 0 &&
          codec::is_valid(c.motion_codec) && codec::is_valid(c.force_codec) && c.counts_per_rev > 0 &&
-         c.torque_limit_nm > 0 && c.safe_hold_torque_nm >= 0 && c.safe_hold_torque_nm <= c.torque_limit_nm &&
-         c.position_min_rad < c.position_max_rad && c.gauge.stale_after > 0 && c.gauge.tare_samples > 0;
+         c.counter_bits >= 8 && c.counter_bits <= 32 && c.torque_limit_nm > 0 && c.safe_hold_torque_nm >= 0 &&
+         c.safe_hold_torque_nm <= c.torque_limit_nm && c.position_min_rad < c.position_max_rad &&
+         c.gauge.stale_after > 0 && c.gauge.tare_samples > 0 && c.timing.overrun_periods >= 1.0 &&
+         c.timing.fault_after >= 1 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
+         h.torque_limit_nm > 0 && h.torque_limit_nm <= c.torque_limit_nm && h.stall_ticks > 0 &&
+         std::isfinite(h.home_position_rad) && h.max_travel_rad > 0;
 }
 
 }  // namespace lever::fw

@@ -2,7 +2,7 @@
 // Telling silence from loss on a deadband link: sequence numbers, tick unwrapping and a watchdog.
 #include <cstdint>
 
-#include "lever/fw/strain_gauge.hpp"  // Tick
+#include "lever/fw/tick.hpp"
 
 namespace lever::fw {
 
@@ -30,6 +30,9 @@ class SequenceTracker {
     return Verdict::after_gap;
   }
 
+  // A new stream from the sender: its next number is the first, whatever it is. The counts stay.
+  constexpr void restart() noexcept { started_ = false; }
+
   constexpr std::uint8_t last() const noexcept { return last_; }
   constexpr std::uint32_t missing() const noexcept { return gaps_; }
   constexpr std::uint32_t stale() const noexcept { return stale_; }
@@ -42,19 +45,31 @@ class SequenceTracker {
 };
 
 // The sender's 16-bit tick extended to 64 bits; valid while frames are less than 32 s apart, which the
-// periodic refresh guarantees.
+// periodic refresh guarantees while a stream lives. A tick that does not advance means the sender restarted
+// (its restart frame was lost) or the frame predates a reset: the extension then starts over at the new tick
+// instead of stepping back, so it only ever grows from a 16-bit start and can neither underflow nor wrap.
 class TickUnwrapper {
  public:
-  constexpr Tick unwrap(std::uint16_t tick) noexcept {
+  struct Unwrapped {
+    Tick tick = 0;
+    bool restarted = false;  // the sender's clock did not advance: its earlier samples are another stream
+  };
+
+  constexpr Unwrapped unwrap(std::uint16_t tick) noexcept {
     if (!started_) {
       started_ = true;
+      last_ = tick;
       extended_ = tick;
-    } else {
-      extended_ = static_cast<Tick>(static_cast<std::int64_t>(extended_) +
-                                    static_cast<std::int16_t>(static_cast<std::uint16_t>(tick - last_)));
+      return {extended_, false};
     }
+    const auto delta = static_cast<std::int16_t>(static_cast<std::uint16_t>(tick - last_));
     last_ = tick;
-    return extended_;
+    if (delta <= 0) {
+      extended_ = tick;
+      return {extended_, true};
+    }
+    extended_ += static_cast<Tick>(delta);
+    return {extended_, false};
   }
   constexpr void reset() noexcept { started_ = false; }
 

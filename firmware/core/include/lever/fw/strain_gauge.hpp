@@ -4,24 +4,18 @@
 #include <cstdint>
 #include <optional>
 
+#include "lever/fw/hal.hpp"  // ForceReading
+#include "lever/fw/tick.hpp"
+
 namespace lever::fw {
-
-using Tick = std::uint64_t;  // firmware sample ticks, 1 ms each
-
-// One amplifier reading as the HAL delivers it: raw ADC code and when it was taken.
-struct ForceReading {
-  std::int32_t raw = 0;
-  Tick tick = 0;
-  bool error = false;  // the transport (Modbus) or the amplifier reported a failed reading
-};
 
 class StrainGauge {
  public:
   struct Config {
     double newton_per_count = 100.0 / 65536.0;  // 16-bit amplifier over +-50 N
     double offset_counts = 0.0;                 // zero-force code, replaced by tare
-    std::int32_t raw_min = -32768;              // codes at or beyond these are saturated
-    std::int32_t raw_max = 32767;
+    double raw_min = -32768.0;                  // readings at or beyond these are saturated
+    double raw_max = 32767.0;
     Tick stale_after = 5;             // ticks; an amplifier sampling at 600 Hz delivers every 1.7 ms
     std::uint16_t tare_samples = 64;  // readings averaged by a tare
   };
@@ -52,7 +46,7 @@ class StrainGauge {
       state_.last_tick = reading->tick;
       state_.saturated = reading->raw <= config_.raw_min || reading->raw >= config_.raw_max;
       if (fresh && state_.tare_left > 0) accumulate_tare(reading->raw);
-      state_.value_counts = static_cast<double>(reading->raw);
+      state_.value_counts = reading->raw;
     }
     state_.stale = !state_.seen || now - state_.last_tick > config_.stale_after || state_.last_tick > now;
     if (state_.stale) {
@@ -71,7 +65,7 @@ class StrainGauge {
   constexpr bool taring() const noexcept { return state_.tare_left > 0; }
 
  private:
-  constexpr void accumulate_tare(std::int32_t raw) noexcept {
+  constexpr void accumulate_tare(double raw) noexcept {
     state_.tare_sum += raw;
     if (--state_.tare_left == 0) state_.offset_counts = state_.tare_sum / config_.tare_samples;
   }

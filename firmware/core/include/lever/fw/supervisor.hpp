@@ -2,18 +2,24 @@
 // The safety state machine. Every transition is an explicit method; faults latch and only a re-arm whose
 // checks pass clears them.
 //
-//   init --boot_complete--> disarmed --arm (no fault active)--> armed
-//   armed --any fault--> fault            (safe behaviour starts in the same tick)
-//   armed|fault --disarm--> disarmed      (latched faults stay latched)
+//   init --boot_complete--> disarmed --arm (no fault active or latched)--> armed
+//   disarmed|fault --home--> homing --found--> disarmed
+//   armed|homing --any fault--> fault     (safe behaviour starts in the same tick)
+//   armed|fault|homing --disarm--> disarmed (latched faults stay latched)
 //   fault|disarmed --rearm (no fault active)--> armed, latched faults cleared
+// Position validity is the lever's to check before arm and rearm (an unhomed lever may not arm).
 #include <cstdint>
 
-#include "lever/fw/faults.hpp"
-#include "lever/fw/strain_gauge.hpp"  // Tick
+#include "lever/fw/tick.hpp"
+#include "lever/protocol/faults.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::fw {
 
+using protocol::bit;
+using protocol::Fault;
+using protocol::FaultBits;
+using protocol::has;
 using protocol::LeverState;
 
 class Supervisor {
@@ -27,11 +33,11 @@ class Supervisor {
     if (state_ == LeverState::init) state_ = LeverState::disarmed;
   }
 
-  // Faults found active this tick. Latched in any state; they end an armed run at once.
+  // Faults found active this tick. Latched in any state; they end an armed run or a homing at once.
   constexpr void report(FaultBits active, Tick now) noexcept {
     if (active == 0) return;
     latched_ = static_cast<FaultBits>(latched_ | active);
-    if (state_ == LeverState::armed) {
+    if (state_ == LeverState::armed || state_ == LeverState::homing) {
       state_ = LeverState::fault;
       fault_since_ = now;
     }
@@ -45,7 +51,7 @@ class Supervisor {
   }
 
   constexpr bool disarm() noexcept {
-    if (state_ != LeverState::armed && state_ != LeverState::fault) return false;
+    if (state_ != LeverState::armed && state_ != LeverState::fault && state_ != LeverState::homing) return false;
     state_ = LeverState::disarmed;
     return true;
   }
@@ -56,6 +62,19 @@ class Supervisor {
     latched_ = 0;
     state_ = LeverState::armed;
     return true;
+  }
+
+  // Homing drives the motor, so it starts only from a state without torque, and only while none of the
+  // faults that would stop it holds; latched faults stay latched (a re-arm clears them).
+  constexpr bool home(FaultBits active) noexcept {
+    if (state_ != LeverState::disarmed && state_ != LeverState::fault) return false;
+    if (active != 0) return false;
+    state_ = LeverState::homing;
+    return true;
+  }
+
+  constexpr void homing_done() noexcept {
+    if (state_ == LeverState::homing) state_ = LeverState::disarmed;
   }
 
  private:

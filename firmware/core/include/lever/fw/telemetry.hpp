@@ -1,0 +1,34 @@
+#pragma once
+// What a lever shows of itself every tick (logs, the stats line, the HIL) and what it counts.
+#include <cstdint>
+#include <optional>
+
+namespace lever::fw {
+
+struct LeverCounters {
+  std::uint32_t rx_frames = 0;    // frames for this pair, decoded
+  std::uint32_t rx_rejected = 0;  // frames for this pair that failed to decode
+  std::uint32_t rx_stale = 0;     // duplicate or reordered data frames, not used
+  std::uint32_t tx_frames = 0;
+  std::uint32_t tx_dropped = 0;         // the CAN queue was full
+  std::uint32_t data_sent = 0;          // data frames sent, refreshes included
+  std::uint32_t refresh_sent = 0;       // of which sent by the refresh period, a restart or a reconfiguration
+  std::uint32_t commands_rejected = 0;  // commands refused by the supervisor or with invalid parameters
+};
+
+struct LeverTelemetry {
+  double position_rad = 0.0;  // lever coordinates; meaningful only while position_valid
+  bool position_valid = false;
+  double velocity_rad_s = 0.0;
+  std::optional<double> force_n;  // own strain gauge, calibrated; empty when stale
+  std::optional<double> remote;   // reconstructed peer value: HSI velocity at the TOP, force at the HSI
+  double position_ref_rad = 0.0;  // TOP tracking reference
+  double velocity_ref_rad_s = 0.0;
+  double torque_demand_nm = 0.0;  // before the limit
+  double torque_nm = 0.0;         // commanded
+  bool motor_enabled = false;
+  bool sent_data = false;     // this tick (deadband or refresh)
+  bool sent_refresh = false;  // this tick, and it was a refresh
+};
+
+}  // namespace lever::fw

@@ -1,0 +1,111 @@
+#pragma once
+// The TOP's part of a lever: the HSI's reconstructed motion is tracked by a position controller, and the
+// measured contact force goes back through the deadband. Everything shared with the HSI (sensors,
+// supervisor, link, safety) is in lever.hpp.
+#include <cstdint>
+#include <optional>
+
+#include "lever/fw/controllers.hpp"
+#include "lever/fw/data_channel.hpp"
+#include "lever/fw/lever_config.hpp"
+#include "lever/fw/telemetry.hpp"
+#include "lever/protocol/messages.hpp"
+
+namespace lever::fw {
+
+class TopRole {
+ public:
+  static constexpr protocol::Role kRole = protocol::Role::top;
+  static constexpr protocol::Role kPeer = protocol::Role::hsi;
+  static constexpr protocol::MessageKind kReceives = protocol::MessageKind::motion;
+  static constexpr protocol::Direction kSends = protocol::Direction::force;
+  // In fault the TOP holds where it was, gently, for a while: letting go could drop a tool on the wall.
+  static constexpr bool kHoldsOnFault = true;
+  using Sender = DataSender<std::int32_t>;
+  using Receiver = DataReceiver<std::int16_t>;
+
+  explicit constexpr TopRole(const LeverConfig& c) noexcept
+      : controller_(c.position),
+        sender_(c.force_codec, force_quantizer(), c.refresh_period),
+        receiver_(velocity_quantizer()),
+        stale_after_(2 * c.refresh_period) {}
+
+  static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_top; }
+  static constexpr bool uses_gauge(const LeverConfig&) noexcept { return true; }
+
+  constexpr const Sender& sender() const noexcept { return sender_; }
+  constexpr const Receiver& receiver() const noexcept { return receiver_; }
+  constexpr Receiver& receiver() noexcept { return receiver_; }
+  constexpr Sender& sender() noexcept { return sender_; }
+  constexpr const PositionController& controller() const noexcept { return controller_; }
+
+  // A motion frame for this pair. The position rides on every velocity frame and resets the integrated
+  // reference (paper section III-A).
+  protocol::DecodeError receive(const protocol::CanFrame& frame, Tick now, bool& used) noexcept {
+    protocol::FrameAddress address;
+    protocol::MotionMessage m;
+    const auto error = protocol::decode(frame, m, address);
+    used = error == protocol::DecodeError::none && receiver_.accept(now, m.tick, m.seq, m.flags, m.velocity);
+    if (used) {
+      position_ref_ = position_quantizer().decode(m.position);
+      have_motion_ = true;
+    }
+    return error;
+  }
+
+  // Until the HSI's motion arrives, the TOP holds where it is.
+  constexpr void on_armed(LeverTelemetry& t) noexcept {
+    sender_.restart();
+    receiver_.expire();
+    position_ref_ = t.position_rad;
+    have_motion_ = false;
+  }
+
+  double control(Tick now, double dt, LeverTelemetry& t) noexcept {
+    if (have_motion_) {
+      // A stale stream leaves the reference where it was: the TOP holds instead of integrating old motion.
+      t.remote = receiver_.value_at(now, stale_after_);
+      t.velocity_ref_rad_s = t.remote.value_or(0.0);
+      if (now != receiver_.last_arrival()) position_ref_ += t.velocity_ref_rad_s * dt;
+    } else {
+      t.velocity_ref_rad_s = 0.0;
+    }
+    t.position_ref_rad = position_ref_;
+    return controller_.update(position_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
+  }
+
+  struct Outgoing {
+    protocol::CanFrame frame;
+    bool refresh = false;
+  };
+  std::optional<Outgoing> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
+    if (!t.force_n) return std::nullopt;  // stale gauge: the supervisor is already taking the lever down
+    const auto out = sender_.offer(now, *t.force_n);
+    if (!out.send) return std::nullopt;
+    protocol::ForceMessage m;
+    m.force = out.code;
+    m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
+    m.seq = out.seq;
+    m.flags = {out.saturated, false, out.refresh, out.mode, out.restart};
+    return Outgoing{protocol::pack(m, pair), out.refresh};
+  }
+
+  // set_deadband for the force direction, which the TOP sends.
+  constexpr void reconfigure(const codec::Config<double>& c) noexcept { sender_.reconfigure(c); }
+
+ private:
+  static constexpr WireQuantizer<std::int16_t> velocity_quantizer() noexcept { return {protocol::kVelocityLsb}; }
+  static constexpr WireQuantizer<std::int32_t> force_quantizer() noexcept {
+    return {protocol::kForceLsb, protocol::kForceCodeMin, protocol::kForceCodeMax};
+  }
+  static constexpr WireQuantizer<std::int16_t> position_quantizer() noexcept { return {protocol::kPositionLsbRad}; }
+
+  PositionController controller_;
+  Sender sender_;
+  Receiver receiver_;
+  Tick stale_after_;
+  double position_ref_ = 0.0;
+  bool have_motion_ = false;
+};
+
+}  // namespace lever::fw
