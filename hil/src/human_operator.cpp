@@ -32,6 +32,14 @@ void HumanOperator::start(const Segment& s, double now_s) {
   move_from_ = intent_angle_;
 }
 
+void HumanOperator::grab_at(fw::Tick now, double angle) {
+  intent_angle_ = angle;
+  intent_speed_ = 0.0;
+  // First back to the working range at an unhurried pace, as a person would before tapping again.
+  const double target = rng_.uniform(0.05, 0.2);
+  start(Segment{Segment::Kind::move, target, 0.0, 1.3, 1.0}, static_cast<double>(now) * 1e-3);
+}
+
 void HumanOperator::update(fw::Tick now, double felt_force) {
   const double now_s = static_cast<double>(now) * 1e-3;
   felt_history_[felt_head_] = felt_force;

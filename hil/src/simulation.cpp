@@ -42,6 +42,7 @@ struct LeverSite {
     }  // the kernel's event queue does not survive a reboot
     lever.emplace(hal, config);
     boot_tick = tick - 1;
+    hal.gauge_.set_clock_offset(boot_tick);  // a board's driver stamps readings on the firmware's clock
     down = false;
   }
   void go_down() {
@@ -159,6 +160,7 @@ SimResult run_simulation(const SimConfig& config) {
 
   // The operator takes the handle once both levers are armed, wherever the HSI then is.
   std::optional<HumanOperator> op;
+  bool hand_was_on = false;
 
   auto send_command = [&](protocol::Opcode opcode, bool to_hsi_lever, bool to_top_lever) {
     if (!to_hsi_lever && !to_top_lever) return;
@@ -172,10 +174,14 @@ SimResult run_simulation(const SimConfig& config) {
       top->rearms_sent += to_top_lever;
     }
   };
-  // What the host does every 100 ms: home a lever whose position is unknown, re-arm one that can be.
+  // What the host does every 100 ms: home a lever whose position is unknown; once neither needs homing,
+  // re-arm the ones that are not armed, so that the pair starts together.
   auto manage_levers = [&] {
-    send_command(protocol::Opcode::home, hsi->needs_homing(), top->needs_homing());
-    send_command(protocol::Opcode::rearm, hsi->needs_arming(), top->needs_arming());
+    const bool hsi_home = hsi->needs_homing(), top_home = top->needs_homing();
+    send_command(protocol::Opcode::home, hsi_home, top_home);
+    const bool homing = hsi_home || top_home || hsi->lever->supervisor().state() == fw::LeverState::homing ||
+                        top->lever->supervisor().state() == fw::LeverState::homing;
+    if (!homing) send_command(protocol::Opcode::rearm, hsi->needs_arming(), top->needs_arming());
   };
 
   // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
@@ -198,6 +204,8 @@ SimResult run_simulation(const SimConfig& config) {
     const double t = scenario ? static_cast<double>(tick - start) * 1e-3 : -1e-3;
     now = static_cast<Nanos>(tick) * kTick;
     const bool hand_on = op.has_value() && hsi->lever->supervisor().state() != fw::LeverState::homing;
+    if (hand_on && !hand_was_on && scenario) op->grab_at(tick - start, hsi->plant.angle());
+    hand_was_on = hand_on;
 
     // Physics over the last millisecond, with the motor commands of the last step.
     for (int s = 0; s < config.substeps; ++s) {

@@ -38,6 +38,10 @@ class HumanOperator {
   // Once per tick: advance the intent. felt_force is the force the hand feels now (N, pushing positive).
   void update(fw::Tick now, double felt_force);
 
+  // The hand takes the handle again where it now is (after letting go while the lever homed), and goes on
+  // with a fresh piece of intent from there instead of yanking the lever to where the old one had got to.
+  void grab_at(fw::Tick now, double angle);
+
   // Torque on the lever at the current state (called at every physics substep).
   double torque(double angle, double speed) const {
     return p_.stiffness * (intent_angle_ - angle) + p_.damping * (intent_speed_ - speed);

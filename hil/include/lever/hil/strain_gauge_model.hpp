@@ -35,8 +35,11 @@ class StrainGaugeModel {
     code = std::round(code);
     if (force_saturated_) code = max_code;
     code = code > max_code ? max_code : code < -max_code - 1.0 ? -max_code - 1.0 : code;
-    reading_ = fw::ForceReading{code, now, false};
+    reading_ = fw::ForceReading{code, now - clock_offset_, false};
   }
+
+  // Readings are stamped on the firmware's clock, which starts again at a reboot: tick - offset.
+  void set_clock_offset(fw::Tick offset) { clock_offset_ = offset; }
 
   // Fault injection: the amplifier stops answering (readings age), or reads at its limit.
   void set_frozen(bool frozen) { frozen_ = frozen; }
@@ -49,6 +52,7 @@ class StrainGaugeModel {
   StrainGaugeParams p_;
   Rng rng_;
   double next_sample_s_ = 0.0;
+  fw::Tick clock_offset_ = 0;
   bool frozen_ = false;
   bool force_saturated_ = false;
   std::optional<fw::ForceReading> reading_;

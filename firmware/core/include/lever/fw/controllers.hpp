@@ -19,6 +19,9 @@ class PositionController {
     double kp = 40.0;            // N m / rad
     double kd = 0.6;             // N m s / rad
     double kff_velocity = 0.02;  // N m s / rad: cancels the lever's viscous friction
+    // After arming, the TOP moves from where it is to where the HSI is at this speed at most, instead of
+    // jumping there at full torque (after a reboot and homing the two can be a radian apart).
+    double approach_speed_rad_s = 1.0;
   };
   struct State {
     double position_error = 0.0;

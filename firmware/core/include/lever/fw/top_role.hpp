@@ -28,7 +28,8 @@ class TopRole {
       : controller_(c.position),
         sender_(c.force_codec, force_quantizer(), c.refresh_period),
         receiver_(velocity_quantizer()),
-        stale_after_(2 * c.refresh_period) {}
+        stale_after_(2 * c.refresh_period),
+        approach_speed_(c.position.approach_speed_rad_s) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_top; }
   static constexpr bool uses_gauge(const LeverConfig&) noexcept { return true; }
@@ -58,7 +59,9 @@ class TopRole {
     sender_.restart();
     receiver_.expire();
     position_ref_ = t.position_rad;
+    tracked_ref_ = t.position_rad;
     have_motion_ = false;
+    approaching_ = true;
   }
 
   double control(Tick now, double dt, LeverTelemetry& t) noexcept {
@@ -70,8 +73,22 @@ class TopRole {
     } else {
       t.velocity_ref_rad_s = 0.0;
     }
-    t.position_ref_rad = position_ref_;
-    return controller_.update(position_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
+    // Approach: the reference the controller sees walks to the HSI's at a bounded speed, then follows it.
+    if (approaching_) {
+      const double step = approach_speed_ * dt;
+      const double gap = position_ref_ - tracked_ref_;
+      if (gap > step) {
+        tracked_ref_ += step;
+      } else if (gap < -step) {
+        tracked_ref_ -= step;
+      } else if (have_motion_) {
+        approaching_ = false;  // caught up with the HSI's motion, not merely with its own start
+      }
+      if (approaching_) t.velocity_ref_rad_s = 0.0;
+    }
+    if (!approaching_) tracked_ref_ = position_ref_;
+    t.position_ref_rad = tracked_ref_;
+    return controller_.update(tracked_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
   }
 
   struct Outgoing {
@@ -104,8 +121,11 @@ class TopRole {
   Sender sender_;
   Receiver receiver_;
   Tick stale_after_;
-  double position_ref_ = 0.0;
+  double approach_speed_;
+  double position_ref_ = 0.0;  // the HSI's position as received and integrated
+  double tracked_ref_ = 0.0;   // what the controller tracks
   bool have_motion_ = false;
+  bool approaching_ = false;
 };
 
 }  // namespace lever::fw
