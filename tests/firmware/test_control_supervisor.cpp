@@ -67,7 +67,7 @@ TEST_CASE("supervisor: init, arm, fault, re-arm", "[firmware][supervisor]") {
   CHECK(s.latched() == 0);
 }
 
-TEST_CASE("supervisor: disarm keeps faults latched; faults latch while disarmed too", "[firmware][supervisor]") {
+TEST_CASE("supervisor: disarm keeps faults latched; only a re-arm clears them", "[firmware][supervisor]") {
   Supervisor s;
   s.boot_complete();
   REQUIRE(s.arm(0));
@@ -77,9 +77,26 @@ TEST_CASE("supervisor: disarm keeps faults latched; faults latch while disarmed 
   CHECK(has(s.latched(), Fault::encoder));
   CHECK_FALSE(s.arm(0));
   CHECK(s.rearm(0));
+  CHECK(s.latched() == 0);
   CHECK(s.disarm());
-  s.report(bit(Fault::motor_driver), 9);
-  CHECK(s.state() == LeverState::disarmed);
-  CHECK(has(s.latched(), Fault::motor_driver));
   CHECK_FALSE(s.disarm());  // nothing to disarm
+}
+
+TEST_CASE("supervisor: homing starts only without torque and without active faults, and a fault ends it",
+          "[firmware][supervisor][homing]") {
+  Supervisor s;
+  CHECK_FALSE(s.home(0));  // not before boot
+  s.boot_complete();
+  CHECK_FALSE(s.home(bit(Fault::motor_driver)));
+  REQUIRE(s.home(0));
+  CHECK(s.state() == LeverState::homing);
+  CHECK_FALSE(s.arm(0));  // no arming while homing
+  s.report(bit(Fault::encoder), 3);
+  CHECK(s.state() == LeverState::fault);
+  CHECK(s.home(0));  // from fault, homing may start again; the latch stays for the re-arm to clear
+  CHECK(has(s.latched(), Fault::encoder));
+  s.homing_done();
+  CHECK(s.state() == LeverState::disarmed);
+  CHECK(s.rearm(0));
+  CHECK(s.armed());
 }

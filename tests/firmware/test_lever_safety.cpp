@@ -324,3 +324,120 @@ TEST_CASE("frames of another pair are ignored, not counted as errors", "[firmwar
   CHECK(rig.top.supervisor().armed());
   CHECK(rig.top.counters().rx_rejected == 0u);
 }
+
+TEST_CASE("a disarmed lever does not latch what it does not report, but will not arm while it holds",
+          "[firmware][lever][supervisor]") {
+  PairRig rig;
+  rig.run(60);
+  rig.top_hal.motor_.fault = true;
+  rig.run(5);
+  CHECK(rig.top.supervisor().latched() == 0);  // disarmed: the lever does not report, so nothing latches
+  rig.command(Opcode::arm);
+  rig.run(2);
+  CHECK(rig.top.supervisor().state() == LeverState::disarmed);  // ...but the condition refuses the arm
+  CHECK(rig.top.counters().commands_rejected == 1u);
+  rig.top_hal.motor_.fault = false;
+  rig.command(Opcode::arm);
+  rig.run(2);
+  CHECK(rig.top.supervisor().armed());
+}
+
+namespace {
+
+// A TOP with an incremental edge encoder and hard-stop homing, on its own plant with an end stop.
+struct HomingRig {
+  test::CanBus bus;
+  test::FakeHal<test::FakeEdgeEncoder> hal{bus};
+  LeverConfig config = [] {
+    LeverConfig c = test::rig_config(protocol::Role::top);
+    c.homing.method = HomingMethod::hard_stop;
+    return c;
+  }();
+  TopLever<test::FakeHal<test::FakeEdgeEncoder>> top{hal, config};
+  double angle = 0.2, speed = 0.0;  // true angle: power-up anywhere
+  double stop = -0.6, stop_stiffness = 20.0;
+  std::int64_t count = 0;  // the encoder's count since power-up
+  Tick now = 1;
+  static constexpr AbState kGray[4] = {0b00, 0b01, 0b11, 0b10};
+
+  void tick() {
+    const double count_per_rad = 16384.0 / (2.0 * 3.14159265358979323846);
+    for (int i = 0; i < 10; ++i) {
+      const double torque = hal.motor_.last.enable ? hal.motor_.last.torque_nm : 0.0;
+      const double bumper = angle < stop ? stop_stiffness * (stop - angle) - 0.05 * speed : 0.0;
+      speed += (torque + (bumper > 0 ? bumper : 0.0) - 0.02 * speed) / 2e-3 * 1e-4;
+      angle += speed * 1e-4;
+      const auto target = static_cast<std::int64_t>(std::floor((angle - 0.2) * count_per_rad));
+      while (count != target) {
+        count += target > count ? 1 : -1;
+        hal.encoder_.push(kGray[((count % 4) + 4) % 4]);
+      }
+    }
+    hal.force_.reading = ForceReading{0, now, false};
+    bus.inject(protocol::pack(protocol::HeartbeatMessage{}, 0, protocol::Role::hsi));
+    top.step(now++);
+  }
+  void command(Opcode op) {
+    protocol::CommandMessage m;
+    m.opcode = op;
+    bus.inject(protocol::pack(m, 0));
+  }
+};
+
+}  // namespace
+
+TEST_CASE("an incremental lever is unhomed at power-up, refuses to arm, homes against its stop and then arms",
+          "[firmware][lever][homing]") {
+  HomingRig rig;
+  for (int i = 0; i < 60; ++i) rig.tick();
+  CHECK_FALSE(rig.top.telemetry().position_valid);
+  rig.command(Opcode::arm);
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::disarmed);  // no arming on an unknown position
+  rig.command(Opcode::home);
+  rig.tick();
+  REQUIRE(rig.top.supervisor().state() == LeverState::homing);
+  double worst_torque = 0.0;
+  int ticks = 0;
+  while (rig.top.supervisor().state() == LeverState::homing && ticks++ < 10000) {
+    rig.tick();
+    worst_torque = std::max(worst_torque, std::fabs(rig.hal.motor_.last.torque_nm));
+  }
+  REQUIRE(rig.top.supervisor().state() == LeverState::disarmed);
+  CHECK(rig.top.telemetry().position_valid);
+  CHECK(worst_torque <= rig.config.homing.torque_limit_nm);
+  // The stop pressed at the homing torque is where the config says it is (-0.61 rad), to within a count or
+  // two of bumper settling, whatever the power-up angle was.
+  CHECK(rig.top.telemetry().position_rad == Approx(rig.angle).margin(0.002));
+  CHECK(rig.top.telemetry().position_rad == Approx(-0.61).margin(0.003));
+  rig.command(Opcode::arm);
+  rig.tick();
+  CHECK(rig.top.supervisor().armed());
+}
+
+TEST_CASE("lost edges latch ENCODER, invalidate the position, and only homing makes it valid again",
+          "[firmware][lever][homing][encoder]") {
+  HomingRig rig;
+  for (int i = 0; i < 60; ++i) rig.tick();
+  rig.command(Opcode::home);
+  for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
+  rig.tick();
+  rig.command(Opcode::arm);
+  rig.tick();
+  REQUIRE(rig.top.supervisor().armed());
+  rig.hal.encoder_.lost = 5;  // the source says: five edges dropped
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::fault);
+  CHECK(has(rig.top.supervisor().latched(), Fault::encoder));
+  CHECK_FALSE(rig.top.telemetry().position_valid);
+  rig.command(Opcode::rearm);
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::fault);  // the count is off: no re-arm before homing
+  rig.command(Opcode::home);
+  for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
+  CHECK(rig.top.telemetry().position_valid);
+  rig.tick();
+  rig.command(Opcode::rearm);
+  rig.tick();
+  CHECK(rig.top.supervisor().armed());
+}
