@@ -4,14 +4,20 @@
 # malloc), exceptions (__cxa_*, _Unwind_*), RTTI or any OS call would show up here as an undefined symbol.
 set -euo pipefail
 allowed='^(sqrtf?|expf?|logf?|sinf?|cosf?|fabsf?|memcpy|memmove|memset|memcmp)$'
+# Exit status: 0 clean, 1 a symbol outside the list, 2 an object that cannot be read.
 status=0
+[[ $# -gt 0 ]] || { echo "usage: $0 OBJECT..." >&2; exit 2; }
 for object in "$@"; do
+  # Read first, so that a missing or unreadable object fails the check instead of passing it (nm's failure
+  # inside a process substitution went unnoticed).
+  symbols=$(nm --undefined-only --format=just-symbols "$object") || { echo "$object: cannot read" >&2; exit 2; }
   while read -r symbol; do
+    [[ -n $symbol ]] || continue
     if [[ ! $symbol =~ $allowed ]]; then
       echo "$object: needs '$(c++filt "$symbol")', which freestanding code must not use" >&2
       status=1
     fi
-  done < <(nm --undefined-only --format=just-symbols "$object")
+  done <<<"$symbols"
 done
 [[ $status -eq 0 ]] && echo "freestanding: $# object(s) need only: $allowed"
 exit $status

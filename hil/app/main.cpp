@@ -29,7 +29,9 @@ struct RunOptions {
   std::optional<Mode> mode_velocity, mode_force;
   double p = 0.1;
   std::optional<double> p_velocity, p_force;
-  double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0, comms_timeout_ms = 50.0;
+  double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
+  double comms_timeout_ms = static_cast<double>(lever::fw::LeverConfig{}.comms_timeout);
+  bool no_homing = false;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -81,10 +83,15 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
       ->default_str("0");
   cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
       ->check(CLI::Range(1.0, 10000.0))
-      ->default_str("50");
+      ->default_str(std::to_string(lever::fw::LeverConfig{}.comms_timeout));
+  cmd.add_flag("--no-homing", o.no_homing,
+               "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
+               "random angle, homed against the end stop before the scenario)");
   cmd.add_option("--fault", o.faults,
                  "inject a fault: KIND@START[+DURATION][:ARG], kinds link-down, burst-loss, delay-step (:MS), "
-                 "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault (:hsi|:top); repeatable");
+                 "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault, tick-late (the firmware not "
+                 "stepped for DURATION), reboot (the controller restarts; +DURATION of boot time) (:hsi|:top); "
+                 "repeatable");
   cmd.add_flag("--json", o.json, "print one JSON object");
   cmd.add_option("--trace", o.trace, "write a per-tick CSV trace");
 }
@@ -98,6 +105,7 @@ SimConfig finish(RunOptions& o) {
   c.hsi_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
+  c.homing = !o.no_homing;
 
   c.record_trace = !o.trace.empty();
   return c;
@@ -130,11 +138,20 @@ void print_human(const SimConfig& c, const SimResult& r) {
   fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);
+  if (c.homing)
+    fmt::print("  before the scenario: both levers powered up at random angles, homed and armed after {:.2f} s\n",
+               r.homed_at_s);
+  if (r.hsi_overruns + r.top_overruns + r.hsi_edges_lost + r.top_edges_lost > 0)
+    fmt::print("  late steps: HSI {}, TOP {}; encoder edges lost: HSI {}, TOP {}\n", r.hsi_overruns, r.top_overruns,
+               r.hsi_edges_lost, r.top_edges_lost);
   for (const auto& f : r.faults) {
     auto say = [](const FaultReport::LeverReaction& x) {
       if (!x.fault_at_s) return std::string("no fault raised");
-      return fmt::format("fault at {:.3f} s (bits {:#x}), safe at {:.3f} s, max torque {:.2f} N m, re-armed {}",
-                         *x.fault_at_s, x.latched, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
+      std::string names;
+      for (const auto bit : lever::protocol::kAllFaults)
+        if (lever::protocol::has(x.latched, bit)) names += (names.empty() ? "" : "+") + std::string(name(bit));
+      return fmt::format("fault at {:.3f} s ({}), safe at {:.3f} s, max torque {:.2f} N m, re-armed {}", *x.fault_at_s,
+                         names, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
                          x.rearmed_at_s ? fmt::format("at {:.3f} s", *x.rearmed_at_s) : "never");
     };
     fmt::print("  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));

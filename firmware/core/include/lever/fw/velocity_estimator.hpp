@@ -2,8 +2,9 @@
 // Lever speed from quantized position. The backward difference is the paper's noisy baseline (one encoder
 // count per ms is 0.38 rad/s); the tracking loop (a type-2 loop on angle) gives a smooth estimate whose
 // bandwidth is a parameter.
-#include <cmath>
 #include <cstdint>
+
+#include "lever/fw/tick.hpp"
 
 namespace lever::fw {
 
@@ -29,52 +30,49 @@ class VelocityEstimator {
 
   // New measured angle after dt seconds; returns the velocity estimate in rad/s.
   //
-  // The tracking loop is integrated exactly over dt, with the measurement taken to move linearly from the
-  // last sample to this one, not by an explicit Euler step: Euler diverged once dt stayed above about 2.8 ms
-  // at 300 rad/s, and one 20 ms scheduling hiccup turned 1 rad/s into 37 rad/s. With the error
-  // e = measured - angle, velocity w and the measurement's slope s over the step,
-  //   e' = -2b e - w + s,  w' = b^2 e.
-  // The matrix M has the double eigenvalue -b, so N = M + bI satisfies N^2 = 0 and
-  //   exp(M t) = exp(-b t) (I + N t):
-  // both poles stay at exp(-b dt) < 1 for every dt, and a ramp is tracked with zero error at any dt, so a
-  // late tick neither blows the estimate up nor drags it toward zero.
+  // The tracking loop is a discrete loop designed at the 1 ms period (Euler on the continuous type-2 loop,
+  // stable with margin at b dt = 0.3). A step that comes late is not one Euler step of the whole interval:
+  // that diverged once dt stayed above about 2.8 ms at 300 rad/s, and one 20 ms scheduling hiccup turned
+  // 1 rad/s into 37 rad/s. It is run as sub-steps of at most one period over the measurement interpolated
+  // linearly across the gap, so every interval gives the designed loop's stable response; a gap longer
+  // than kMaxSubsteps periods (the lever has long since latched TIMING) restarts the estimate from the
+  // backward difference over the gap, which bounds the work per call.
   double update(double measured_angle, double dt) noexcept {
     if (!state_.primed || !(dt > 0.0)) {
       state_ = {measured_angle, 0.0, measured_angle, true};
       return 0.0;
     }
+    const double previous = state_.previous;
+    state_.previous = measured_angle;
     if (config_.method == VelocityMethod::backward_difference) {
-      state_.velocity = (measured_angle - state_.previous) / dt;
-      state_.previous = measured_angle;
+      state_.velocity = (measured_angle - previous) / dt;
+      return state_.velocity;
+    }
+    const double periods = dt / kSecondsPerTick;
+    if (periods > static_cast<double>(kMaxSubsteps)) {
+      state_.velocity = (measured_angle - previous) / dt;
+      state_.angle = measured_angle;
       return state_.velocity;
     }
     const double b = config_.bandwidth_rad_s;
-    if (dt != cached_dt_) {  // one exp() per change of step, not per tick
-      cached_dt_ = dt;
-      decay_ = std::exp(-b * dt);
-      // The forcing by the slope: integral of exp(M t) over the step, applied to (s, 0).
-      const double i0 = (1.0 - decay_) / b;
-      const double i1 = (1.0 - decay_ * (1.0 + b * dt)) / (b * b);
-      slope_to_error_ = i0 - b * i1;
-      slope_to_velocity_ = b * b * i1;
+    const int substeps = periods <= 1.0 + 1e-9 ? 1 : static_cast<int>(periods - 1e-9) + 1;
+    const double h = dt / substeps;
+    for (int i = 1; i <= substeps; ++i) {
+      const double target =
+          i == substeps ? measured_angle : previous + (measured_angle - previous) * (static_cast<double>(i) / substeps);
+      // theta' = w + kp e, w' = ki e with kp = 2 b, ki = b^2: error dynamics s^2 + 2bs + b^2.
+      const double error = target - state_.angle;
+      state_.velocity += b * b * error * h;
+      state_.angle += (state_.velocity + 2.0 * b * error) * h;
     }
-    const double slope = (measured_angle - state_.previous) / dt;
-    const double e = state_.previous - state_.angle;
-    const double w = state_.velocity;
-    const double e_next = decay_ * (e * (1.0 - b * dt) - w * dt) + slope * slope_to_error_;
-    state_.velocity = decay_ * (w * (1.0 + b * dt) + b * b * dt * e) + slope * slope_to_velocity_;
-    state_.angle = measured_angle - e_next;
-    state_.previous = measured_angle;
     return state_.velocity;
   }
 
  private:
+  static constexpr int kMaxSubsteps = 100;
+
   Config config_;
   State state_;
-  double cached_dt_ = 0.0;
-  double decay_ = 1.0;
-  double slope_to_error_ = 0.0;
-  double slope_to_velocity_ = 0.0;
 };
 
 }  // namespace lever::fw
