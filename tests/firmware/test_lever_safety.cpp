@@ -441,3 +441,24 @@ TEST_CASE("lost edges latch ENCODER, invalidate the position, and only homing ma
   rig.tick();
   CHECK(rig.top.supervisor().armed());
 }
+
+TEST_CASE("a 16-bit hardware counter behind the counting port is unwrapped, not taken as the count",
+          "[firmware][lever][encoder]") {
+  test::CanBus bus;
+  test::FakeHal<> hal(bus);
+  LeverConfig config = test::rig_config(protocol::Role::hsi);
+  config.counter_bits = 16;
+  hal.encoder_.width_mask = 0xFFFF;
+  HsiLever<test::FakeHal<>> hsi(hal, config);
+  const double rad_per_count = 2.0 * 3.14159265358979323846 / config.counts_per_rev;
+  // Power-up at -10 counts, then 20 turns forward at 3000 counts a tick: the register wraps every 65536.
+  std::int64_t truth = -10;
+  Tick now = 1;
+  for (int i = 0; i < 110; ++i) {
+    hal.encoder_.counts = static_cast<std::int32_t>(truth);  // the fake keeps only the low 16 bits
+    hsi.step(now++);
+    REQUIRE(hsi.telemetry().position_rad == Approx(static_cast<double>(truth) * rad_per_count));
+    truth += 3000;
+  }
+  CHECK(truth > 65536 * 5);
+}
