@@ -48,28 +48,34 @@ class VelocityEstimator {
       state_.velocity = (measured_angle - previous) / dt;
       return state_.velocity;
     }
-    const double periods = dt / kSecondsPerTick;
+    const double periods = dt * (1.0 / kSecondsPerTick);  // a constant: no division per tick
     if (periods > static_cast<double>(kMaxSubsteps)) {
       state_.velocity = (measured_angle - previous) / dt;
       state_.angle = measured_angle;
       return state_.velocity;
     }
-    const double b = config_.bandwidth_rad_s;
-    const int substeps = periods <= 1.0 + 1e-9 ? 1 : static_cast<int>(periods - 1e-9) + 1;
-    const double h = dt / substeps;
-    for (int i = 1; i <= substeps; ++i) {
-      const double target =
-          i == substeps ? measured_angle : previous + (measured_angle - previous) * (static_cast<double>(i) / substeps);
-      // theta' = w + kp e, w' = ki e with kp = 2 b, ki = b^2: error dynamics s^2 + 2bs + b^2.
-      const double error = target - state_.angle;
-      state_.velocity += b * b * error * h;
-      state_.angle += (state_.velocity + 2.0 * b * error) * h;
+    if (periods <= 1.0 + 1e-9) {
+      euler_step(measured_angle, dt);  // the nominal tick
+      return state_.velocity;
     }
+    const int substeps = static_cast<int>(periods - 1e-9) + 1;
+    const double h = dt / substeps;
+    for (int i = 1; i < substeps; ++i)
+      euler_step(previous + (measured_angle - previous) * (static_cast<double>(i) / substeps), h);
+    euler_step(measured_angle, h);
     return state_.velocity;
   }
 
  private:
   static constexpr int kMaxSubsteps = 100;
+
+  // theta' = w + kp e, w' = ki e with kp = 2 b, ki = b^2: error dynamics s^2 + 2bs + b^2.
+  constexpr void euler_step(double target, double h) noexcept {
+    const double b = config_.bandwidth_rad_s;
+    const double error = target - state_.angle;
+    state_.velocity += b * b * error * h;
+    state_.angle += (state_.velocity + 2.0 * b * error) * h;
+  }
 
   Config config_;
   State state_;
