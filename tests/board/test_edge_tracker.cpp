@@ -22,9 +22,10 @@ struct Drained {
   std::uint32_t lost = 0;
 };
 
-Drained drain(EdgeTracker& t, std::uint64_t read_started, std::size_t capacity = 64) {
+// `read_empty_at`: when the reads found every line's FIFO empty.
+Drained drain(EdgeTracker& t, std::uint64_t read_empty_at, std::size_t capacity = 64) {
   std::vector<EncoderEdge> out(capacity);
-  const auto d = t.deliver(out.data(), capacity, read_started);
+  const auto d = t.deliver(out.data(), capacity, read_empty_at);
   out.resize(d.count);
   return {out, d.lost};
 }
@@ -49,6 +50,21 @@ TEST_CASE("edges of both lines come out merged by kernel time, as the levels aft
   // 00 -> 01 -> 11 -> 10 -> 00: one forward cycle.
   CHECK(levels_of(d) == std::vector<AbState>{ab(0, 1), ab(1, 1), ab(1, 0), ab(0, 0)});
   CHECK(t.stats().edges == 4);
+}
+
+TEST_CASE("an edge newer than the reads are complete waits, so an older one of the other line goes first") {
+  EdgeTracker t(ab(false, false), kOpen, kMargin);
+  // B's edge (3'000) was read; A's older one landed in its FIFO just after A had been read empty at 3'020,
+  // within the margin of B's.
+  t.stage(B, {3'000, true});
+  auto d = drain(t, 3'020);
+  CHECK(d.edges.empty());
+  CHECK_FALSE(t.wants_level_check());
+  t.stage(A, {2'990, true});
+  d = drain(t, 4'000);
+  CHECK(d.lost == 0);
+  // 00 -> 10 -> 11: two steps back, as the lines moved.
+  CHECK(levels_of(d) == std::vector<AbState>{ab(1, 0), ab(1, 1)});
 }
 
 TEST_CASE("a drain with too little room leaves the rest, in order, for the next") {
@@ -178,8 +194,9 @@ TEST_CASE("level check: waits while edges of its window may still be on their wa
   EdgeTracker t(ab(false, false), kOpen, kMargin);
   drain(t, 2'000);
   t.begin_level_check(ab(false, true), 2'100, 2'200);
-  // Reads that began before the window closed (hi + margin = 2'250) cannot judge it.
-  CHECK(drain(t, 2'240).lost == 0);
+  // Reads not complete past the window's end (hi + margin = 2'250, plus the margin for edges on their way)
+  // cannot judge it.
+  CHECK(drain(t, 2'290).lost == 0);
   CHECK(t.level_check_pending());
   // Nor can a drain that still holds an edge of the window (no room to deliver it).
   t.stage(B, {2'150, true});

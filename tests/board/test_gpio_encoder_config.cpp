@@ -62,8 +62,8 @@ TEST_CASE("each problem names its field") {
   CHECK(mentions(c.validate(), "consumer: 32 characters"));
 
   c = good();
-  c.level_check_margin_us = 20'000;
-  CHECK(mentions(c.validate(), "level_check_margin_us"));
+  c.edge_latency_us = 2'000;
+  CHECK(mentions(c.validate(), "edge_latency_us"));
 
   c = good();
   c.chip.clear();

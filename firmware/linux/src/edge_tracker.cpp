@@ -18,6 +18,11 @@ std::size_t EdgeTracker::room(EncoderLine line) const noexcept {
   return kStageCapacity - stage_[static_cast<std::size_t>(line)].size;
 }
 
+std::uint64_t EdgeTracker::newest_staged_ns(EncoderLine line) const noexcept {
+  const Stage& s = stage_[static_cast<std::size_t>(line)];
+  return s.size == 0 ? 0 : s.events[(s.head + s.size - 1) % kStageCapacity].timestamp_ns;
+}
+
 bool EdgeTracker::stage(EncoderLine line, const LineEvent& event) noexcept {
   Stage& s = stage_[static_cast<std::size_t>(line)];
   if (s.size == kStageCapacity) return false;
@@ -114,10 +119,10 @@ void EdgeTracker::apply(EncoderLine line, const LineEvent& event, fw::EncoderEdg
 }
 
 void EdgeTracker::judge_level_check(fw::EncoderEdge* out, std::size_t& count, std::size_t capacity,
-                                    std::uint64_t read_started_ns) noexcept {
+                                    std::uint64_t complete_until_ns) noexcept {
   if (!check_.pending) return;
-  // Edges stamped inside the window may still have been on their way when the last reads began.
-  if (read_started_ns <= check_.hi) return;
+  // Edges stamped inside the window may still be on their way.
+  if (complete_until_ns < check_.hi) return;
   for (std::size_t i = 0; i < 2; ++i) {
     const Stage& s = stage_[i];
     if (s.size != 0 && s.front().timestamp_ns <= check_.hi) return;
@@ -143,7 +148,10 @@ void EdgeTracker::judge_level_check(fw::EncoderEdge* out, std::size_t& count, st
   out[count++] = fw::EncoderEdge{levels(), false};
 }
 
-fw::EdgeDrain EdgeTracker::deliver(fw::EncoderEdge* out, std::size_t capacity, std::uint64_t read_started_ns) noexcept {
+fw::EdgeDrain EdgeTracker::deliver(fw::EncoderEdge* out, std::size_t capacity,
+                                   std::uint64_t read_empty_at_ns) noexcept {
+  // Everything stamped up to here is staged, unless it took longer than the margin to reach its FIFO.
+  const std::uint64_t complete_until_ns = read_empty_at_ns > margin_ns_ ? read_empty_at_ns - margin_ns_ : 0;
   std::size_t count = 0;
   while (count < capacity) {
     // Oldest head first; on a tie A before B before Z, which is as good as any order for equal times.
@@ -153,13 +161,15 @@ fw::EdgeDrain EdgeTracker::deliver(fw::EncoderEdge* out, std::size_t capacity, s
       if (pick == kEncoderLines || stage_[i].front().timestamp_ns < stage_[pick].front().timestamp_ns) pick = i;
     }
     if (pick == kEncoderLines) break;
+    // An older edge of another line may still come: this one waits for the next drain.
+    if (stage_[pick].front().timestamp_ns > complete_until_ns) break;
     Stage& s = stage_[pick];
     const LineEvent event = s.front();
     s.head = (s.head + 1) % kStageCapacity;
     --s.size;
     apply(static_cast<EncoderLine>(pick), event, out, count);
   }
-  judge_level_check(out, count, capacity, read_started_ns);
+  judge_level_check(out, count, capacity, complete_until_ns);
   fw::EdgeDrain drain{count, pending_lost_};
   pending_lost_ = 0;
   return drain;

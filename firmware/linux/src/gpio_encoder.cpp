@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <gpiod.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -17,9 +18,6 @@ namespace {
 // The v1 interface's per-line event FIFO (gpiolib-cdev.c: DECLARE_KFIFO(events, struct gpioevent_data, 16)).
 // A read asking for this many that gets them all has found the FIFO full.
 constexpr unsigned kKernelFifo = 16;
-// Rounds of reading every line: events that land on one line while another is read are picked up by the next
-// round, so the merge sees both; bounded so a flood cannot hold the tick.
-constexpr int kReadRounds = 4;
 
 std::uint64_t monotonic_ns() noexcept {
   timespec ts{};
@@ -63,35 +61,43 @@ struct GpioEncoder::Impl {
        std::string d)
       : chip(std::move(c)), lines(l), fds(f), tracker(t), description(std::move(d)) {}
 
-  void read_events() noexcept;
+  // Reads every line's FIFO; returns the time after which each was found empty (or its stage full).
+  std::uint64_t read_events() noexcept;
   void start_level_check() noexcept;
 };
 
-void GpioEncoder::Impl::read_events() noexcept {
+std::uint64_t GpioEncoder::Impl::read_events() noexcept {
   std::array<gpiod_line_event, kKernelFifo> buffer{};
-  for (int round = 0; round < kReadRounds; ++round) {
-    bool any = false;
-    for (std::size_t i = 0; i < kEncoderLines; ++i) {
-      if (fds[i] < 0) continue;
-      const auto line = static_cast<EncoderLine>(i);
+  std::uint64_t complete = UINT64_MAX;
+  for (std::size_t i = 0; i < kEncoderLines; ++i) {
+    if (fds[i] < 0) continue;
+    const auto line = static_cast<EncoderLine>(i);
+    for (;;) {
       // Always ask for a whole FIFO: only then does a full answer prove the FIFO was full. With less room the
-      // events wait in the kernel (and a FIFO that fills meanwhile still shows as full on the next read).
-      while (tracker.room(line) >= kKernelFifo) {
-        const int n = gpiod_line_event_read_fd_multiple(fds[i], buffer.data(), kKernelFifo);
-        if (n < 0) {
-          if (errno != EAGAIN && errno != EWOULDBLOCK) tracker.note_read_error();
-          break;
-        }
-        for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
-          tracker.stage(line, LineEvent{to_ns(buffer[k].ts), buffer[k].event_type == GPIOD_LINE_EVENT_RISING_EDGE});
-        }
-        any = any || n > 0;
-        if (static_cast<unsigned>(n) < kKernelFifo) break;
-        tracker.note_fifo_full();
+      // events wait in the kernel (and a FIFO that fills meanwhile still shows as full on a later read).
+      if (tracker.room(line) < kKernelFifo) {
+        complete = std::min(complete, tracker.newest_staged_ns(line));
+        break;
       }
+      const std::uint64_t before = monotonic_ns();
+      const int n = gpiod_line_event_read_fd_multiple(fds[i], buffer.data(), kKernelFifo);
+      if (n < 0) {
+        if (errno != EAGAIN && errno != EWOULDBLOCK) tracker.note_read_error();
+        complete = std::min(complete, before);
+        break;
+      }
+      for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
+        tracker.stage(line, LineEvent{to_ns(buffer[k].ts), buffer[k].event_type == GPIOD_LINE_EVENT_RISING_EDGE});
+      }
+      if (static_cast<unsigned>(n) < kKernelFifo) {
+        // The read stops only when the FIFO is empty or our buffer full: all that was queued before it is here.
+        complete = std::min(complete, before);
+        break;
+      }
+      tracker.note_fifo_full();
     }
-    if (!any) break;
   }
+  return complete;
 }
 
 void GpioEncoder::Impl::start_level_check() noexcept {
@@ -185,16 +191,15 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
   const std::uint64_t read_end = monotonic_ns();
   if (a < 0) return os_error(err_a, "encoder line_a: cannot read its level");
   if (b < 0) return os_error(err_b, "encoder line_b: cannot read its level");
-  const std::uint64_t margin_ns = std::uint64_t{config.level_check_margin_us} * 1000u;
+  const std::uint64_t margin_ns = std::uint64_t{config.edge_latency_us} * 1000u;
   EdgeTracker tracker(fw::ab(a != 0, b != 0), read_end, margin_ns);
   return GpioEncoder(std::make_unique<Impl>(std::move(chip), lines, fds, tracker, std::move(description)));
 }
 
 fw::EdgeDrain GpioEncoder::drain_edges(fw::EncoderEdge* out, std::size_t capacity) noexcept {
   if (!impl_) return {};
-  const std::uint64_t read_started = monotonic_ns();
-  impl_->read_events();
-  const fw::EdgeDrain drain = impl_->tracker.deliver(out, capacity, read_started);
+  const std::uint64_t read_empty_at = impl_->read_events();
+  const fw::EdgeDrain drain = impl_->tracker.deliver(out, capacity, read_empty_at);
   if (impl_->tracker.wants_level_check()) impl_->start_level_check();
   return drain;
 }

@@ -10,8 +10,8 @@ namespace {
 
 // The kernel's consumer label holds 32 bytes with the terminating zero; a longer one is cut silently.
 constexpr std::size_t kMaxConsumer = 31;
-// Past this the check would forgive a line that has been wrong for a whole tick or more.
-constexpr std::uint32_t kMaxMarginUs = 10'000;
+// Past a 1 ms tick, every edge would wait a tick or more, and the level check forgive as much.
+constexpr std::uint32_t kMaxLatencyUs = 1'000;
 
 }  // namespace
 
@@ -52,9 +52,9 @@ std::vector<std::string> GpioEncoderConfig::validate() const {
     problems.emplace_back("consumer: " + std::to_string(consumer.size()) + " characters, the kernel keeps " +
                           std::to_string(kMaxConsumer));
   }
-  if (level_check_margin_us > kMaxMarginUs) {
-    problems.emplace_back("level_check_margin_us: " + std::to_string(level_check_margin_us) + " is above " +
-                          std::to_string(kMaxMarginUs) + " (a tick's worth of edges would go unchecked)");
+  if (edge_latency_us > kMaxLatencyUs) {
+    problems.emplace_back("edge_latency_us: " + std::to_string(edge_latency_us) + " is above " +
+                          std::to_string(kMaxLatencyUs) + " (every edge would wait a tick or more)");
   }
   return problems;
 }

@@ -3,15 +3,21 @@
 // the per-line edge events of the GPIO v1 interface into one stream, keeps the A/B levels, and finds the
 // edges the kernel lost without telling (its 16-event FIFO per line drops the newest when full).
 //
+// Merging: each line's events come from its own file, read one after the other, so an edge that lands on A
+// just after A was read may be older than one read from B a moment later. The caller says when its reads
+// found every line empty; edges newer than that, less the margin for edges still on their way from the
+// interrupt to the FIFO, wait for the next drain, so the stream stays in time order.
+//
 // How a loss shows (each adds 1 to the `lost` the next drain reports):
 //  - a read that came back with a whole FIFO's worth of events: the FIFO was full, so newer ones may be gone;
 //  - an edge whose type contradicts the tracked level (two rising edges in a row on one line);
-//  - an A/B edge older than one already delivered: the order of the two lines' edges is unknown;
+//  - an A/B edge older than one already delivered (it was on its way longer than the margin): the order of
+//    the two lines' edges, and so the direction, is unknown;
 //  - a level check that fails: the levels read from the lines disagree with what the edges say they were.
-// A level check is timed, not immediate: the values are read at [lo, hi], and judged only once every edge
-// time-stamped up to hi (plus a margin for interrupt latency) has been delivered, so an edge the reader merely
-// saw late (still in the FIFO, or in flight between the interrupt and the FIFO) is no loss. A line that
-// changed inside the window may read either level. A failed check re-syncs the line to the level read and
+// A level check is timed, not immediate: the values are read at [lo, hi], and judged only once the reads are
+// complete past hi plus the margin and every edge up to there is delivered, so an edge the reader merely saw
+// late (still in the FIFO, or in flight between the interrupt and the FIFO) is no loss. A line that changed
+// within the margin of the read may show either level. A failed check re-syncs the line to the level read and
 // delivers one extra edge with the corrected levels, so one loss is reported once and the decoder downstream
 // follows the lines again.
 #include <array>
@@ -48,7 +54,8 @@ class EdgeTracker {
 
   // `levels`: the A/B values read right after the lines were requested; `read_end_ns`: when that read ended.
   // Edges stamped up to read_end + margin may already be in those values: they set the level, never count as
-  // a loss. `margin_ns`: how much later than the level change an edge may be stamped (interrupt latency).
+  // a loss. `margin_ns`: how long an edge may take to show, from the level change to its stamp (interrupt
+  // latency) and from its stamp to the FIFO (the kernel's interrupt thread).
   EdgeTracker(fw::AbState levels, std::uint64_t read_end_ns, std::uint64_t margin_ns) noexcept;
 
   std::size_t room(EncoderLine line) const noexcept;
@@ -59,9 +66,12 @@ class EdgeTracker {
   void note_read_error() noexcept;
 
   // Up to `capacity` edges, oldest first by kernel time, then the verdict of a pending level check if it can
-  // be judged now. `read_started_ns`: when the reads that staged the latest events began; a check is judged
-  // only by reads that began after its window closed.
-  fw::EdgeDrain deliver(fw::EncoderEdge* out, std::size_t capacity, std::uint64_t read_started_ns) noexcept;
+  // be judged now. `read_empty_at_ns`: the caller's reads found every line's FIFO empty at or after this time
+  // (or the line's stage full up to it); edges stamped within the margin before it may still be on their way,
+  // so only older ones go out.
+  fw::EdgeDrain deliver(fw::EncoderEdge* out, std::size_t capacity, std::uint64_t read_empty_at_ns) noexcept;
+  // The newest event staged for a line (0 if none): how far a line whose stage is full has been read.
+  std::uint64_t newest_staged_ns(EncoderLine line) const noexcept;
 
   // True when a new level check may start: none pending and nothing staged.
   bool wants_level_check() const noexcept;
@@ -89,7 +99,7 @@ class EdgeTracker {
 
   void apply(EncoderLine line, const LineEvent& event, fw::EncoderEdge* out, std::size_t& count) noexcept;
   void judge_level_check(fw::EncoderEdge* out, std::size_t& count, std::size_t capacity,
-                         std::uint64_t read_started_ns) noexcept;
+                         std::uint64_t complete_until_ns) noexcept;
   void lose() noexcept;
 
   std::array<Stage, kEncoderLines> stage_{};

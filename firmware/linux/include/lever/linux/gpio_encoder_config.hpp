@@ -39,9 +39,11 @@ struct GpioEncoderConfig {
   std::optional<LineRef> line_z;
   bool active_low = false;            // all three lines; the levels and edge types the decoder sees are then inverted
   std::string consumer = "lever-fw";  // shown by gpioinfo; the kernel keeps 31 characters
-  // How much later than the level change an edge's timestamp may be (interrupt latency): a line read within
-  // this time of an edge may show either level without counting as a loss.
-  std::uint32_t level_check_margin_us = 50;
+  // How long an edge may take to show: from the level change to its timestamp (interrupt latency), and from
+  // the timestamp to the event FIFO (the kernel's interrupt thread). Edges younger than this wait for the next
+  // drain (the other line may still deliver an older one), and a line read within this time of an edge may
+  // show either level without counting as a loss.
+  std::uint32_t edge_latency_us = 50;
 
   // Every problem, each naming its field ("line_b: ..."); empty when the config can be opened.
   std::vector<std::string> validate() const;
