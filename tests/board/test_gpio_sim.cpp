@@ -297,13 +297,15 @@ TEST_CASE("an edge that follows a lost one on the same line contradicts the leve
   Session s(by_label_and_names());
   // 17 toggles of A: the FIFO keeps 16, the 17th (A's last move) is dropped.
   auto gen = s.generate({"rate=0", "bounce:a=17"}, false);
-  s.drain();  // one drain: delivers the 16, starts a level check
+  s.drain();  // one drain: delivers the 16 (the full FIFO already counts as a loss), starts a level check
+  const auto lost_before = s.lost();
   // The next move of A arrives while the tracked level is still the wrong one.
   gen = s.generate({"rate=0", "bounce:a=1"}, false);
   s.settle();
   s.report("17 toggles of A, one drain, then this 1 toggle", gen);
-  CHECK(s.lost() > 0);
+  CHECK(lost_before > 0);
   CHECK(s.encoder().stats().impossible >= 1);
+  CHECK(s.lost() > lost_before);  // the contradiction itself reaches the caller
   CHECK(s.encoder().levels() == gen.levels);
 }
 
