@@ -158,18 +158,19 @@ class Session {
 
   void report(const char* what, const GenSummary& s) const {
     const auto& st = encoder_.stats();
+    const std::string allocs =
+        lever::test::alloc_counting_available() ? std::to_string(allocations_) : "not counted (ASan)";
     std::printf(
         "measured: %s: generated %llu edges in %.2f s (%.0f edges/s); delivered %llu edges, %llu index; decoded "
         "%lld; lost %llu (fifo_full %llu, impossible %llu, reordered %llu, resyncs %llu); level checks %llu; "
-        "illegal transitions %llu; drains %llu; allocations in drains %llu\n",
+        "illegal transitions %llu; drains %llu; allocations in drains %s\n",
         what, static_cast<unsigned long long>(s.edges), s.elapsed_s,
         s.elapsed_s > 0 ? static_cast<double>(s.edges) / s.elapsed_s : 0.0, static_cast<unsigned long long>(st.edges),
         static_cast<unsigned long long>(st.index_edges), static_cast<long long>(decoder_.count()),
         static_cast<unsigned long long>(lost_), static_cast<unsigned long long>(st.fifo_full),
         static_cast<unsigned long long>(st.impossible), static_cast<unsigned long long>(st.reordered),
         static_cast<unsigned long long>(st.resyncs), static_cast<unsigned long long>(st.level_checks),
-        static_cast<unsigned long long>(decoder_.illegal()), static_cast<unsigned long long>(drains_),
-        static_cast<unsigned long long>(allocations_));
+        static_cast<unsigned long long>(decoder_.illegal()), static_cast<unsigned long long>(drains_), allocs.c_str());
     std::fflush(stdout);
   }
 
