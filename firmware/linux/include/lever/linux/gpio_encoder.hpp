@@ -21,6 +21,8 @@ class GpioEncoder {
   // A/B levels to start from. Fails, naming the chip, the line and the reason, when any step does.
   static Result<GpioEncoder> open(const GpioEncoderConfig& config);
 
+  // Move-only: the chip and the line requests have one owner. A moved-from encoder owns nothing and drains
+  // nothing; it may only be destroyed or assigned to.
   GpioEncoder(GpioEncoder&&) noexcept;
   GpioEncoder& operator=(GpioEncoder&&) noexcept;
   GpioEncoder(const GpioEncoder&) = delete;
