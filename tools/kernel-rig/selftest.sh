@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Self-test of the kernel rig: boots the guest twice (about 10 s each under TCG).
+# Self-test of the kernel rig: boots the guest three times (about 10 s each under TCG).
 #   1. can-utils as real peers on vcan0; vcan1 present; a vxcan pair and a can-gw route carry frames
 #   2. a command's exit code (3) comes back as run-in-guest's exit code
+#   3. --gpio-sim: gpio-sim-chip makes a chip whose named lines libgpiod's tools see and pull writes drive
 # usage: tools/kernel-rig/selftest.sh      exit 0 when all pass; last line "N passed, N failed"
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -96,6 +97,25 @@ check "can-utils, vcan0/vcan1, vxcan, can-gw in the guest" 0 $?
 echo "== exit code of the command comes back"
 "$here/run-in-guest" --timeout 300 -- sh -c 'echo "guest: exiting 3"; exit 3'
 check "run-in-guest exits 3 when the command does" 3 $?
+
+# shellcheck disable=SC2016  # expanded in the guest, not here
+gpio_script='
+set -eu
+helper=$1
+set -- $("$helper" rigtest alpha beta)
+chip=$1 dev=$2
+gpioinfo "$chip" | grep -q "\"beta\"" || { echo "guest: gpioinfo does not name line 1 beta" >&2; exit 1; }
+pull=/sys/devices/platform/$dev/$chip/sim_gpio1/pull
+echo pull-up >"$pull"
+[ "$(gpioget "$chip" 1)" = 1 ] || { echo "guest: pull-up did not read 1" >&2; exit 1; }
+echo pull-down >"$pull"
+[ "$(gpioget "$chip" 1)" = 0 ] || { echo "guest: pull-down did not read 0" >&2; exit 1; }
+"$helper" --remove rigtest
+echo "guest: gpio-sim chip $chip ($dev): named lines, driven by pull writes, removed"
+'
+echo "== gpio-sim: a simulated chip driven through sysfs, read with libgpiod's tools"
+"$here/run-in-guest" --timeout 300 --gpio-sim -- bash -c "$gpio_script" gpio-selftest "$here/gpio-sim-chip"
+check "gpio-sim chip made, named, driven and removed in the guest" 0 $?
 
 echo "$passed passed, $failed failed"
 ((failed == 0))

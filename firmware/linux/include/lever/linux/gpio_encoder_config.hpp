@@ -1,0 +1,52 @@
+#pragma once
+// Where the lever's quadrature encoder is wired: a GPIO chip and its A, B and optional index (Z) lines, as the
+// board's config names them.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace lever::linux_io {
+
+// A line by its offset on the chip or by its name (as the device tree or gpio-line-names give it).
+class LineRef {
+ public:
+  LineRef() = default;
+  static LineRef offset(unsigned offset) { return LineRef(offset); }
+  static LineRef name(std::string name) { return LineRef(std::move(name)); }
+  // All digits: an offset; anything else: a name.
+  static LineRef parse(std::string_view text);
+
+  bool is_offset() const noexcept { return std::holds_alternative<unsigned>(ref_); }
+  unsigned offset_value() const { return std::get<unsigned>(ref_); }
+  const std::string& name_value() const { return std::get<std::string>(ref_); }
+  std::string describe() const;  // "offset 3" or "\"ENC_A\"", for messages
+  bool operator==(const LineRef&) const = default;
+
+ private:
+  explicit LineRef(unsigned offset) : ref_(offset) {}
+  explicit LineRef(std::string name) : ref_(std::move(name)) {}
+  std::variant<unsigned, std::string> ref_{0u};
+};
+
+struct GpioEncoderConfig {
+  // "/dev/gpiochip2" (a path), "gpiochip2" (a name), or the chip's label ("20ac000.gpio", "enc").
+  std::string chip;
+  LineRef line_a;
+  LineRef line_b;
+  std::optional<LineRef> line_z;
+  bool active_low = false;            // all three lines; the levels and edge types the decoder sees are then inverted
+  std::string consumer = "lever-fw";  // shown by gpioinfo; the kernel keeps 31 characters
+  // How long an edge may take to show: from the level change to its timestamp (interrupt latency), and from
+  // the timestamp to the event FIFO (the kernel's interrupt thread). Edges younger than this wait for the next
+  // drain (the other line may still deliver an older one), and a line read within this time of an edge may
+  // show either level without counting as a loss.
+  std::uint32_t edge_latency_us = 50;
+
+  // Every problem, each naming its field ("line_b: ..."); empty when the config can be opened.
+  std::vector<std::string> validate() const;
+};
+
+}  // namespace lever::linux_io

@@ -1,0 +1,332 @@
+// GpioEncoder against the real kernel GPIO stack: a gpio-sim chip in the kernel rig's guest, its lines driven by
+// lever-gpio-quadrature-gen. Run by tests/kernel/gpio_encoder.sh, which makes the chip and sets:
+//   LEVER_GPIO_CHIP   the chip's name (gpiochipN)      LEVER_GPIO_LABEL  its label
+//   LEVER_GPIO_SYSFS  its sysfs directory (pull files) LEVER_GPIO_GEN    the generator
+// The chip's lines: 0 "enc-a", 1 "enc-b", 2 "enc-z". The guest's clock is emulated and slow: the tests assert
+// what was delivered, never how fast.
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "lever/linux/gpio_encoder.hpp"
+
+extern char** environ;
+
+using lever::fw::AbState;
+using lever::fw::EncoderEdge;
+using lever::linux_io::GpioEncoder;
+using lever::linux_io::GpioEncoderConfig;
+using lever::linux_io::LineRef;
+
+namespace {
+
+std::string env(const char* name) {
+  const char* v = std::getenv(name);
+  if (v == nullptr || *v == '\0') FAIL(name << " is not set: run this through tests/kernel/gpio_encoder.sh");
+  return v;
+}
+
+// The test's own decoder, independent of the firmware core's: Gray order 00 -> 01 -> 11 -> 10 -> 00 counts up,
+// a jump of two states is illegal and counts nothing.
+class Decoder {
+ public:
+  explicit Decoder(AbState start) : state_(start) {}
+  void feed(AbState levels) {
+    static constexpr int kIllegal = 9;
+    static constexpr int table[4][4] = {
+        {0, +1, -1, kIllegal}, {-1, 0, kIllegal, +1}, {+1, kIllegal, 0, -1}, {kIllegal, -1, +1, 0}};
+    const int step = table[state_][levels];
+    if (step == kIllegal) {
+      ++illegal_;
+    } else {
+      count_ += step;
+    }
+    state_ = levels;
+  }
+  std::int64_t count() const { return count_; }
+  std::uint64_t illegal() const { return illegal_; }
+
+ private:
+  AbState state_;
+  std::int64_t count_ = 0;
+  std::uint64_t illegal_ = 0;
+};
+
+struct GenSummary {
+  std::uint64_t edges = 0;
+  std::int64_t position = 0;
+  AbState levels = 0;
+  std::vector<std::int64_t> index_at;
+  double elapsed_s = 0;
+};
+
+class Session {
+ public:
+  explicit Session(const GpioEncoderConfig& config) : encoder_(open_or_fail(config)), decoder_(encoder_.levels()) {}
+
+  // Runs the generator with `steps` to its end. With `drain_meanwhile`, drains every millisecond while it runs
+  // (the firmware's tick); without, the reader is stalled for the whole run.
+  GenSummary generate(const std::vector<std::string>& steps, bool drain_meanwhile) {
+    const std::string summary_path =
+        std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/gpio-gen-summary.json";
+    std::vector<std::string> args{
+        env("LEVER_GPIO_GEN"), "--dir",     env("LEVER_GPIO_SYSFS"), "--a", "0", "--b", "1", "--z", "2",
+        "--summary",           summary_path};
+    args.insert(args.end(), steps.begin(), steps.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    REQUIRE(::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+    int status = 0;
+    if (drain_meanwhile) {
+      timespec next{};
+      ::clock_gettime(CLOCK_MONOTONIC, &next);
+      for (;;) {
+        drain();
+        const pid_t done = ::waitpid(pid, &status, WNOHANG);
+        if (done < 0) FAIL("waitpid on the generator failed");
+        if (done == pid) break;
+        next.tv_nsec += 1'000'000;
+        if (next.tv_nsec >= 1'000'000'000) {
+          next.tv_nsec -= 1'000'000'000;
+          ++next.tv_sec;
+        }
+        ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+      }
+    } else {
+      REQUIRE(::waitpid(pid, &status, 0) == pid);
+    }
+    REQUIRE(WIFEXITED(status));
+    REQUIRE(WEXITSTATUS(status) == 0);
+    std::ifstream in(summary_path);
+    const auto j = nlohmann::json::parse(in);
+    GenSummary s;
+    s.edges = j.at("edges");
+    s.position = j.at("position");
+    const std::string levels = j.at("levels");
+    s.levels = lever::fw::ab(levels[0] == '1', levels[1] == '1');
+    s.index_at = j.at("index_at").get<std::vector<std::int64_t>>();
+    s.elapsed_s = j.at("elapsed_s");
+    return s;
+  }
+
+  void drain() {
+    std::array<EncoderEdge, 256> buffer{};
+    const bool count_allocs = lever::test::alloc_counting_available();
+    if (count_allocs) lever::test::alloc_count_begin();
+    const auto d = encoder_.drain_edges(buffer.data(), buffer.size());
+    if (count_allocs) allocations_ += lever::test::alloc_count_end();
+    ++drains_;
+    lost_ += d.lost;
+    for (std::size_t i = 0; i < d.count; ++i) {
+      if (buffer[i].index) {
+        index_at_.push_back(decoder_.count());
+      } else {
+        decoder_.feed(buffer[i].levels);
+      }
+    }
+  }
+
+  // Some ticks more, so that straggling events and the last level check are through.
+  void settle(int ticks = 50) {
+    for (int i = 0; i < ticks; ++i) {
+      timespec ms{0, 1'000'000};
+      ::nanosleep(&ms, nullptr);
+      drain();
+    }
+  }
+
+  GpioEncoder& encoder() { return encoder_; }
+  const Decoder& decoder() const { return decoder_; }
+  std::uint64_t lost() const { return lost_; }
+  std::uint64_t allocations() const { return allocations_; }
+  std::uint64_t drains() const { return drains_; }
+  const std::vector<std::int64_t>& index_at() const { return index_at_; }
+
+  void report(const char* what, const GenSummary& s) const {
+    const auto& st = encoder_.stats();
+    const std::string allocs =
+        lever::test::alloc_counting_available() ? std::to_string(allocations_) : "not counted (ASan)";
+    std::printf(
+        "measured: %s: generated %llu edges in %.2f s (%.0f edges/s); delivered %llu edges, %llu index; decoded "
+        "%lld; lost %llu (fifo_full %llu, impossible %llu, reordered %llu, resyncs %llu); level checks %llu; "
+        "illegal transitions %llu; drains %llu; allocations in drains %s\n",
+        what, static_cast<unsigned long long>(s.edges), s.elapsed_s,
+        s.elapsed_s > 0 ? static_cast<double>(s.edges) / s.elapsed_s : 0.0, static_cast<unsigned long long>(st.edges),
+        static_cast<unsigned long long>(st.index_edges), static_cast<long long>(decoder_.count()),
+        static_cast<unsigned long long>(lost_), static_cast<unsigned long long>(st.fifo_full),
+        static_cast<unsigned long long>(st.impossible), static_cast<unsigned long long>(st.reordered),
+        static_cast<unsigned long long>(st.resyncs), static_cast<unsigned long long>(st.level_checks),
+        static_cast<unsigned long long>(decoder_.illegal()), static_cast<unsigned long long>(drains_), allocs.c_str());
+    std::fflush(stdout);
+  }
+
+ private:
+  static GpioEncoder open_or_fail(const GpioEncoderConfig& config) {
+    auto r = GpioEncoder::open(config);
+    if (!r.ok()) FAIL("open: " << r.error().message);
+    return std::move(r).value();
+  }
+
+  GpioEncoder encoder_;
+  Decoder decoder_;
+  std::uint64_t lost_ = 0;
+  std::uint64_t allocations_ = 0;
+  std::uint64_t drains_ = 0;
+  std::vector<std::int64_t> index_at_;
+};
+
+// By label and line names, as a board's config would say it.
+GpioEncoderConfig by_label_and_names() {
+  GpioEncoderConfig c;
+  c.chip = env("LEVER_GPIO_LABEL");
+  c.line_a = LineRef::parse("enc-a");
+  c.line_b = LineRef::parse("enc-b");
+  c.line_z = LineRef::parse("enc-z");
+  c.consumer = "lever-gpio-sim-test";
+  return c;
+}
+
+// By device path and offsets.
+GpioEncoderConfig by_path_and_offsets() {
+  GpioEncoderConfig c;
+  c.chip = "/dev/" + env("LEVER_GPIO_CHIP");
+  c.line_a = LineRef::offset(0);
+  c.line_b = LineRef::offset(1);
+  c.line_z = LineRef::offset(2);
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("paced quadrature is counted exactly: 4000 edges forward, then 1500 back, at 2000 edges/s") {
+  Session s(by_label_and_names());
+  const auto gen = s.generate({"rate=2000", "+4000", "-1500"}, true);
+  s.settle();
+  s.report("paced 4000 forward, 1500 back", gen);
+  REQUIRE(gen.edges == 5500);
+  REQUIRE(gen.position == 2500);
+  CHECK(s.lost() == 0);
+  CHECK(s.decoder().illegal() == 0);
+  CHECK(s.encoder().stats().edges == 5500);
+  CHECK(s.decoder().count() == 2500);
+  CHECK(s.encoder().levels() == gen.levels);
+  // The level check ran all along and never found the lines elsewhere.
+  CHECK(s.encoder().stats().level_checks > 100);
+  CHECK(s.encoder().stats().resyncs == 0);
+  if (lever::test::alloc_counting_available()) CHECK(s.allocations() == 0);
+}
+
+TEST_CASE("index rises are delivered where the index line rose") {
+  Session s(by_path_and_offsets());
+  const auto gen = s.generate({"rate=2000", "+100", "index", "+300", "index", "-150", "index", "-250", "index"}, true);
+  s.settle();
+  s.report("index pulses", gen);
+  REQUIRE(gen.index_at == std::vector<std::int64_t>{100, 400, 250, 0});
+  CHECK(s.lost() == 0);
+  CHECK(s.encoder().stats().index_edges == 4);
+  CHECK(s.index_at() == gen.index_at);
+  CHECK(s.decoder().count() == gen.position);
+}
+
+TEST_CASE("a burst the reader cannot keep up with is reported as loss, never as a silently wrong count") {
+  SECTION("reader stalled through the whole burst: both FIFOs overflow") {
+    Session s(by_label_and_names());
+    // 400 edges bring the lines back to where they started: only the full FIFOs can tell that 368 are missing.
+    const auto gen = s.generate({"rate=0", "+400"}, false);
+    s.settle();
+    s.report("burst of 400, reader stalled", gen);
+    CHECK(s.lost() > 0);
+    CHECK(s.encoder().stats().fifo_full >= 2);
+    CHECK(s.decoder().count() != gen.position);  // what the loss report is for
+    CHECK(s.encoder().levels() == gen.levels);
+
+    // Afterwards the count moves exactly with the lines again (from wherever the loss left it).
+    const auto before = s.decoder().count();
+    const auto lost_before = s.lost();
+    const auto paced = s.generate({"rate=2000", "+200"}, true);
+    s.settle();
+    CHECK(s.lost() == lost_before);
+    CHECK(s.decoder().count() - before == paced.position);
+  }
+  SECTION("reader draining every millisecond while the generator writes as fast as it can") {
+    Session s(by_label_and_names());
+    const auto gen = s.generate({"rate=0", "+2000", "-400"}, true);
+    s.settle();
+    s.report("unpaced 2000 forward, 400 back, reader at 1 kHz", gen);
+    const bool exact = s.lost() == 0 && s.decoder().count() == gen.position;
+    std::printf("measured: unpaced burst %s\n", exact ? "counted exactly, no loss" : "reported as loss");
+    CHECK((exact || s.lost() > 0));
+    CHECK(s.encoder().levels() == gen.levels);
+  }
+}
+
+TEST_CASE("both lines flipping unseen between two drains reach the decoder as an illegal transition") {
+  Session s(by_label_and_names());
+  // Both FIFOs are filled by chatter (16 edges each, lines back where they were), so the flip of both lines
+  // that follows leaves no event at all: only the level check can see it.
+  const auto gen = s.generate({"rate=0", "bounce:a=16", "bounce:b=16", "glitch"}, false);
+  s.settle();
+  s.report("chatter filling both FIFOs, then A and B flip", gen);
+  CHECK(s.lost() > 0);
+  CHECK(s.encoder().stats().resyncs >= 1);
+  CHECK(s.decoder().illegal() >= 1);
+  CHECK(s.encoder().levels() == gen.levels);
+
+  const auto before = s.decoder().count();
+  const auto lost_before = s.lost();
+  const auto paced = s.generate({"rate=2000", "-300"}, true);
+  s.settle();
+  CHECK(s.lost() == lost_before);
+  CHECK(s.decoder().count() - before == paced.position);
+}
+
+TEST_CASE("an edge that follows a lost one on the same line contradicts the level and is reported") {
+  Session s(by_label_and_names());
+  // 17 toggles of A: the FIFO keeps 16, the 17th (A's last move) is dropped.
+  auto gen = s.generate({"rate=0", "bounce:a=17"}, false);
+  s.drain();  // one drain: delivers the 16 (the full FIFO already counts as a loss), starts a level check
+  const auto lost_before = s.lost();
+  // The next move of A arrives while the tracked level is still the wrong one.
+  gen = s.generate({"rate=0", "bounce:a=1"}, false);
+  s.settle();
+  s.report("17 toggles of A, one drain, then this 1 toggle", gen);
+  CHECK(lost_before > 0);
+  CHECK(s.encoder().stats().impossible >= 1);
+  CHECK(s.lost() > lost_before);  // the contradiction itself reaches the caller
+  CHECK(s.encoder().levels() == gen.levels);
+}
+
+TEST_CASE("a line that is busy, missing or on no chip gives an error naming it, never an object") {
+  GpioEncoderConfig c = by_label_and_names();
+  c.line_b = LineRef::parse("enc-nope");
+  auto r = GpioEncoder::open(c);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("line_b") != std::string::npos);
+  CHECK(r.error().message.find("enc-nope") != std::string::npos);
+
+  c = by_path_and_offsets();
+  c.line_z = LineRef::offset(7);
+  r = GpioEncoder::open(c);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("line_z (offset 7") != std::string::npos);
+
+  Session holder(by_label_and_names());
+  r = GpioEncoder::open(by_path_and_offsets());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("busy") != std::string::npos);
+  CHECK(r.error().message.find("lever-gpio-sim-test") != std::string::npos);
+}
