@@ -11,6 +11,8 @@
 #include <optional>
 #include <utility>
 
+#include "gpio_chip.hpp"
+
 namespace lever::linux_io {
 
 namespace {
@@ -29,24 +31,8 @@ std::uint64_t to_ns(const timespec& ts) noexcept {
   return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
 }
 
-struct ChipCloser {
-  // Closing the chip also releases every line requested through it.
-  void operator()(gpiod_chip* chip) const noexcept { gpiod_chip_close(chip); }
-};
-using ChipPtr = std::unique_ptr<gpiod_chip, ChipCloser>;
-
 // errno is taken before the message is built: building it may allocate, which may set errno.
 Error os_error(int err, std::string message) { return Error{std::move(message) + ": " + std::strerror(err), err}; }
-
-// A path, a gpiochipN name, or else a label; libgpiod's own lookup would also take a bare number, which a
-// config should not mean silently.
-gpiod_chip* open_chip(const std::string& chip) {
-  if (chip.front() == '/') return gpiod_chip_open(chip.c_str());
-  if (chip.rfind("gpiochip", 0) == 0) {
-    if (gpiod_chip* c = gpiod_chip_open_by_name(chip.c_str())) return c;
-  }
-  return gpiod_chip_open_by_label(chip.c_str());
-}
 
 }  // namespace
 
@@ -124,12 +110,12 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
     message.pop_back();
     return Error{message, EINVAL};
   }
-  ChipPtr chip(open_chip(config.chip));
+  ChipPtr chip = open_gpio_chip(config.chip);
   if (!chip) {
     const int err = errno;
     return os_error(err, "encoder chip \"" + config.chip + "\": cannot open (no such path, name or label?)");
   }
-  const std::string chip_text = std::string(gpiod_chip_name(chip.get())) + " [" + gpiod_chip_label(chip.get()) + "]";
+  const std::string chip_text = describe_chip(chip.get());
 
   struct Wanted {
     const char* field;
@@ -149,15 +135,10 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
     const Wanted& w = wanted[i];
     if (w.ref == nullptr) continue;
     const std::string where = std::string("encoder ") + w.field + " (" + w.ref->describe() + " on " + chip_text + ")";
-    gpiod_line* line = w.ref->is_offset() ? gpiod_chip_get_line(chip.get(), w.ref->offset_value())
-                                          : gpiod_chip_find_line(chip.get(), w.ref->name_value().c_str());
+    gpiod_line* line = find_gpio_line(chip.get(), *w.ref);
     if (line == nullptr) {
       const int err = errno;
-      if (w.ref->is_offset()) {
-        return os_error(
-            err, where + ": no such line (the chip has " + std::to_string(gpiod_chip_num_lines(chip.get())) + ")");
-      }
-      return os_error(err, where + ": no line of that name on this chip");
+      return os_error(err, where + ": " + missing_line_reason(chip.get(), *w.ref));
     }
     for (std::size_t j = 0; j < i; ++j) {
       if (lines[j] == line) return os_error(EINVAL, where + ": the same line as " + wanted[j].field);
@@ -165,11 +146,7 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
     const gpiod_line_request_config request{config.consumer.c_str(), w.request_type, flags};
     if (gpiod_line_request(line, &request, 0) < 0) {
       const int err = errno;
-      std::string user;
-      if (err == EBUSY && gpiod_line_update(line) == 0 && gpiod_line_consumer(line) != nullptr) {
-        user = std::string(", used by \"") + gpiod_line_consumer(line) + "\"";
-      }
-      return os_error(err, where + ": cannot request its edge events" + user);
+      return os_error(err, where + ": cannot request its edge events" + line_user_if_busy(line, err));
     }
     lines[i] = line;
     fds[i] = gpiod_line_event_get_fd(line);

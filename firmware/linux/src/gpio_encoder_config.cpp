@@ -1,37 +1,17 @@
 #include "lever/linux/gpio_encoder_config.hpp"
 
-#include <algorithm>
-#include <cctype>
-#include <charconv>
+#include <string>
+
+#include "gpio_chip.hpp"
 
 namespace lever::linux_io {
 
 namespace {
 
-// The kernel's consumer label holds 32 bytes with the terminating zero; a longer one is cut silently.
-constexpr std::size_t kMaxConsumer = 31;
 // Past a 1 ms tick, every edge would wait a tick or more, and the level check forgive as much.
 constexpr std::uint32_t kMaxLatencyUs = 1'000;
 
 }  // namespace
-
-LineRef LineRef::parse(std::string_view text) {
-  const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c)) != 0;
-  });
-  if (digits) {
-    unsigned value = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec == std::errc{} && end == text.data() + text.size()) return offset(value);
-  }
-  // Too many digits for an offset is no offset either; open() then reports no line of that name.
-  return name(std::string(text));
-}
-
-std::string LineRef::describe() const {
-  if (is_offset()) return "offset " + std::to_string(offset_value());
-  return "\"" + name_value() + "\"";
-}
 
 std::vector<std::string> GpioEncoderConfig::validate() const {
   std::vector<std::string> problems;
@@ -48,9 +28,9 @@ std::vector<std::string> GpioEncoderConfig::validate() const {
   if (line_z && *line_z == line_b)
     problems.emplace_back("line_z: the same line as line_b (" + line_z->describe() + ")");
   if (consumer.empty()) problems.emplace_back("consumer: empty (gpioinfo would show the lines as unnamed users)");
-  if (consumer.size() > kMaxConsumer) {
+  if (consumer.size() > kMaxGpioConsumer) {
     problems.emplace_back("consumer: " + std::to_string(consumer.size()) + " characters, the kernel keeps " +
-                          std::to_string(kMaxConsumer));
+                          std::to_string(kMaxGpioConsumer));
   }
   if (edge_latency_us > kMaxLatencyUs) {
     problems.emplace_back("edge_latency_us: " + std::to_string(edge_latency_us) + " is above " +

@@ -4,32 +4,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <string_view>
-#include <variant>
 #include <vector>
 
+#include "lever/linux/line_ref.hpp"
+
 namespace lever::linux_io {
-
-// A line by its offset on the chip or by its name (as the device tree or gpio-line-names give it).
-class LineRef {
- public:
-  LineRef() = default;
-  static LineRef offset(unsigned offset) { return LineRef(offset); }
-  static LineRef name(std::string name) { return LineRef(std::move(name)); }
-  // All digits: an offset; anything else: a name.
-  static LineRef parse(std::string_view text);
-
-  bool is_offset() const noexcept { return std::holds_alternative<unsigned>(ref_); }
-  unsigned offset_value() const { return std::get<unsigned>(ref_); }
-  const std::string& name_value() const { return std::get<std::string>(ref_); }
-  std::string describe() const;  // "offset 3" or "\"ENC_A\"", for messages
-  bool operator==(const LineRef&) const = default;
-
- private:
-  explicit LineRef(unsigned offset) : ref_(offset) {}
-  explicit LineRef(std::string name) : ref_(std::move(name)) {}
-  std::variant<unsigned, std::string> ref_{0u};
-};
 
 struct GpioEncoderConfig {
   // "/dev/gpiochip2" (a path), "gpiochip2" (a name), or the chip's label ("20ac000.gpio", "enc").
