@@ -1,0 +1,314 @@
+// The PWM motor on a temporary sysfs tree (pwm_sysfs_tree.hpp): what open() writes, duty following torque,
+// unchanged values left alone, and the motor stopped on every way out: destruction, exit(), the emergency
+// stop, SIGINT and SIGTERM, abort(). The GPIO lines are tested in the kernel rig (test_pwm_motor_gpio_sim.cpp);
+// here the motor has none, so it is configured positive_torque_only.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "fork_child.hpp"
+#include "lever/linux/motor_stop_signals.hpp"
+#include "lever/linux/pwm_motor.hpp"
+#include "lever/linux/torque_to_duty.hpp"
+#include "pwm_sysfs_tree.hpp"
+
+using lever::fw::MotorCommand;
+using lever::linux_io::LineRef;
+using lever::linux_io::MotorLineConfig;
+using lever::linux_io::PwmMotor;
+using lever::linux_io::PwmMotorConfig;
+using lever::linux_io::TorqueToDuty;
+using lever::test::PwmSysfsTree;
+using lever::test::wait_status_of_child;
+
+namespace {
+
+constexpr unsigned kChip = 2;
+constexpr unsigned kChannel = 1;
+
+// 1 Nm at full duty: the duty in ns is the torque in Nm times the period.
+PwmMotorConfig config_for(const PwmSysfsTree& tree) {
+  PwmMotorConfig c;
+  c.sysfs_root = tree.root();
+  c.pwm_chip = kChip;
+  c.pwm_channel = kChannel;
+  c.period_ns = 50'000;
+  c.torque_constant_nm_per_a = 0.05;
+  c.gear_ratio = 10.0;
+  c.full_scale_current_a = 2.0;
+  c.max_duty = 0.9;
+  c.deadband_nm = 0.01;
+  c.positive_torque_only = true;
+  return c;
+}
+
+PwmMotor open_or_fail(const PwmMotorConfig& config) {
+  auto motor = PwmMotor::open(config);
+  if (!motor) FAIL(motor.error().message);
+  return std::move(motor).value();
+}
+
+bool mentions(const std::vector<std::string>& problems, const std::string& text) {
+  for (const auto& p : problems)
+    if (p.find(text) != std::string::npos) return true;
+  return false;
+}
+
+bool stopped(const PwmSysfsTree& tree) { return tree.read("duty_cycle") == "0" && tree.read("enable") == "0"; }
+
+// In a child: a motor driving 0.3 Nm, so that a stop has something to undo. Exit code 90: it did not drive.
+PwmMotor driving_motor(const PwmSysfsTree& tree) {
+  auto motor = PwmMotor::open(config_for(tree));
+  if (!motor) ::_exit(90);
+  motor.value().command({0.3, true});
+  if (tree.read("duty_cycle") != "15000" || tree.read("enable") != "1") ::_exit(91);
+  return std::move(motor).value();
+}
+
+}  // namespace
+
+TEST_CASE("PwmMotorConfig: each problem names its field", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  CHECK(config_for(tree).validate().empty());
+
+  PwmMotorConfig c = config_for(tree);
+  c.sysfs_root.clear();
+  c.period_ns = 500;
+  c.torque_constant_nm_per_a = 0.0;
+  c.gear_ratio = -1.0;
+  c.full_scale_current_a = std::numeric_limits<double>::quiet_NaN();
+  c.max_duty = 1.5;
+  c.deadband_nm = -0.1;
+  c.consumer = std::string(40, 'x');
+  const auto problems = c.validate();
+  CHECK(mentions(problems, "sysfs_root:"));
+  CHECK(mentions(problems, "period_ns: 500"));
+  CHECK(mentions(problems, "torque_constant_nm_per_a: 0,"));
+  CHECK(mentions(problems, "gear_ratio: -1,"));
+  CHECK(mentions(problems, "full_scale_current_a: nan"));
+  CHECK(mentions(problems, "max_duty: 1.5"));
+  CHECK(mentions(problems, "deadband_nm: -0.1"));
+  CHECK(mentions(problems, "consumer: 40 characters"));
+
+  PwmMotorConfig lines = config_for(tree);
+  lines.positive_torque_only = false;
+  CHECK(mentions(lines.validate(), "direction_line: none"));
+  lines.direction_line = MotorLineConfig{"gpiochip0", LineRef::name("DIR"), false};
+  lines.enable_line = MotorLineConfig{"gpiochip0", LineRef::name("DIR"), false};
+  lines.fault_line = MotorLineConfig{"", LineRef::name(""), true};
+  const auto line_problems = lines.validate();
+  CHECK(mentions(line_problems, "direction_line: the same line as enable_line"));
+  CHECK(mentions(line_problems, "fault_line.chip: empty"));
+  CHECK(mentions(line_problems, "fault_line.line: empty name"));
+  lines.positive_torque_only = true;
+  CHECK(mentions(lines.validate(), "positive_torque_only: set, yet direction_line is given"));
+
+  const auto refused = PwmMotor::open(c);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message.find("motor config: sysfs_root:") == 0);
+}
+
+TEST_CASE("TorqueToDuty: magnitude over the torque at full duty, clamped, with a deadband and a sign", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotorConfig c = config_for(tree);
+  c.positive_torque_only = false;
+  const TorqueToDuty map(c);
+  CHECK(map.torque_at_full_duty_nm() == Approx(1.0));
+  CHECK(map(0.3).duty_ns == 15'000);
+  CHECK_FALSE(map(0.3).negative);
+  CHECK(map(-0.3).duty_ns == 15'000);
+  CHECK(map(-0.3).negative);
+  CHECK(map(0.200018).duty_ns == 10'001);  // 10000.9 ns: rounded to the nearest, not truncated
+  CHECK(map(0.95).duty_ns == 45'000);      // max_duty 0.9
+  CHECK(map(-7.0).duty_ns == 45'000);
+  CHECK(map(std::numeric_limits<double>::infinity()).duty_ns == 45'000);
+  CHECK(map(0.009).duty_ns == 0);  // deadband 0.01
+  CHECK(map(-0.009).duty_ns == 0);
+  CHECK(map(0.01).duty_ns == 500);
+  CHECK(map(0.0).duty_ns == 0);
+  CHECK(map(std::numeric_limits<double>::quiet_NaN()).duty_ns == 0);
+
+  c.positive_torque_only = true;
+  const TorqueToDuty positive_only(c);
+  CHECK(positive_only(0.3).duty_ns == 15'000);
+  CHECK(positive_only(-0.3).duty_ns == 0);
+}
+
+TEST_CASE("PwmMotor: open disables the channel, zeroes the duty, then writes the period and polarity", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);  // as a crashed run left it: enabled, duty 123456, inversed
+  PwmMotorConfig c = config_for(tree);
+  SECTION("normal polarity") {
+    const PwmMotor motor = open_or_fail(c);
+    CHECK(tree.read("enable") == "0");
+    CHECK(tree.read("duty_cycle") == "0");
+    CHECK(tree.read("period") == "50000");
+    CHECK(tree.read("polarity") == "normal");
+    CHECK(tree.read_export().empty());  // pwm1/ was there: taken over, not exported again
+    CHECK(motor.description().find("pwmchip2/pwm1 20000 Hz") == 0);
+  }
+  SECTION("inversed polarity") {
+    c.pwm_inversed = true;
+    c.period_ns = 40'000;
+    const PwmMotor motor = open_or_fail(c);
+    CHECK(tree.read("period") == "40000");
+    CHECK(tree.read("polarity") == "inversed");
+  }
+}
+
+TEST_CASE("PwmMotor: open exports a channel that is not there, and names it when it never appears", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel, /*with_channel=*/false);
+  PwmMotorConfig c = config_for(tree);
+  c.export_timeout_ms = 20;  // a regular file cannot make the kernel create pwm1/: it never comes
+  const auto motor = PwmMotor::open(c);
+  REQUIRE_FALSE(motor.ok());
+  CHECK(tree.read_export() == "1");
+  CHECK(motor.error().message.find("pwmchip2/pwm1/enable and duty_cycle not writable 20 ms after the export") !=
+        std::string::npos);
+}
+
+TEST_CASE("PwmMotor: open names a PWM chip that is not there", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotorConfig c = config_for(tree);
+  c.pwm_chip = 7;
+  const auto motor = PwmMotor::open(c);
+  REQUIRE_FALSE(motor.ok());
+  CHECK(motor.error().message.find("class/pwm/pwmchip7") != std::string::npos);
+}
+
+TEST_CASE("PwmMotor: the duty follows the torque; disabled, the channel is off at zero duty", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotor motor = open_or_fail(config_for(tree));
+  motor.command({0.3, true});
+  CHECK(tree.read("duty_cycle") == "15000");
+  CHECK(tree.read("enable") == "1");
+  CHECK(motor.stats().duty_ns == 15'000);
+  motor.command({1.5, true});  // clamped at max_duty 0.9
+  CHECK(tree.read("duty_cycle") == "45000");
+  motor.command({0.005, true});  // inside the deadband: no torque, still enabled
+  CHECK(tree.read("duty_cycle") == "0");
+  CHECK(tree.read("enable") == "1");
+  motor.command({-0.3, true});  // positive_torque_only: never the positive torque
+  CHECK(tree.read("duty_cycle") == "0");
+  motor.command({0.2, true});
+  CHECK(tree.read("duty_cycle") == "10000");
+  motor.command({0.2, false});
+  CHECK(tree.read("duty_cycle") == "0");
+  CHECK(tree.read("enable") == "0");
+  CHECK_FALSE(motor.driver_fault());
+  CHECK(motor.stats().failed_commands == 0);
+}
+
+TEST_CASE("PwmMotor: a value already written is not written again", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotor motor = open_or_fail(config_for(tree));
+  motor.command({0.3, true});
+  tree.overwrite("duty_cycle", "untouched\n");
+  tree.overwrite("enable", "untouched\n");
+  motor.command({0.3, true});
+  CHECK(tree.read("duty_cycle") == "untouched");
+  CHECK(tree.read("enable") == "untouched");
+  motor.command({0.4, true});
+  CHECK(tree.read("duty_cycle") == "20000");
+  CHECK(tree.read("enable") == "untouched");
+}
+
+TEST_CASE("PwmMotor: a command allocates nothing", "[motor]") {
+  if (!lever::test::alloc_counting_available()) {
+    WARN("allocations are not countable under AddressSanitizer");
+    return;
+  }
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotor motor = open_or_fail(config_for(tree));
+  lever::test::alloc_count_begin();
+  for (int i = 0; i < 100; ++i) {
+    motor.command({0.001 * i, i % 10 != 0});
+    (void)motor.driver_fault();
+  }
+  CHECK(lever::test::alloc_count_end() == 0);
+}
+
+TEST_CASE("PwmMotor: destruction and reassignment leave the channel off at zero duty", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmSysfsTree other(kChip, kChannel + 1);
+  {
+    PwmMotor motor = open_or_fail(config_for(tree));
+    motor.command({0.3, true});
+    REQUIRE_FALSE(stopped(tree));
+    PwmMotor moved = std::move(motor);  // the moved-from one must not stop the motor its successor drives
+    moved.command({0.4, true});
+    REQUIRE(tree.read("duty_cycle") == "20000");
+
+    PwmMotorConfig second = config_for(other);
+    second.pwm_channel = kChannel + 1;
+    moved = open_or_fail(second);
+    CHECK(stopped(tree));
+    moved.command({0.1, true});
+    REQUIRE_FALSE(stopped(other));
+  }
+  CHECK(stopped(other));
+}
+
+TEST_CASE("PwmMotor: the emergency stop zeroes every open motor at once and latches", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = driving_motor(tree);
+    PwmMotor::emergency_stop_all();
+    if (!stopped(tree)) return 1;
+    if (!motor.driver_fault()) return 2;
+    motor.command({0.5, true});  // latched: still off
+    if (!stopped(tree)) return 3;
+    return 0;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(stopped(tree));
+}
+
+TEST_CASE("PwmMotor: SIGINT and SIGTERM stop the motor in the handler; a second one ends the process", "[motor]") {
+  const int signal_number = GENERATE(SIGINT, SIGTERM);
+  CAPTURE(signal_number);
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    if (!lever::linux_io::install_motor_stop_signal_handlers()) return 80;
+    PwmMotor motor = driving_motor(tree);
+    ::raise(signal_number);
+    if (lever::linux_io::stop_signal_received() != signal_number) return 1;
+    // The handler alone, no destructor: it must have stopped the motor by itself.
+    if (!stopped(tree)) return 2;
+    ::raise(signal_number);
+    return 3;  // the second signal should have ended the process
+  });
+  REQUIRE(WIFSIGNALED(status));
+  CHECK(WTERMSIG(status) == signal_number);
+  CHECK(stopped(tree));
+}
+
+TEST_CASE("PwmMotor: a normal exit, exit() or a return from main, with the motor still open stops it", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = driving_motor(tree);
+    std::exit(0);  // what a return from main ends in; this motor's destructor never runs
+    return 1;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(stopped(tree));
+}
+
+TEST_CASE("PwmMotor: abort() (so std::terminate) stops the motor before the process dies", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    if (!lever::linux_io::install_motor_stop_signal_handlers()) return 80;
+    PwmMotor motor = driving_motor(tree);
+    std::abort();
+    return 1;
+  });
+  REQUIRE(WIFSIGNALED(status));
+  CHECK(WTERMSIG(status) == SIGABRT);
+  CHECK(stopped(tree));
+}
