@@ -11,74 +11,19 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
 #include <vector>
 
+#include "bench_pair.hpp"
 #include "lever/fw/lever.hpp"
 
 namespace {
 
 using namespace lever;
 using Clock = std::chrono::steady_clock;
-
-// Fixed-capacity CAN queue: no heap in the timed path.
-class RingQueue {
- public:
-  bool push(const protocol::CanFrame& f) {
-    if (count_ == frames_.size()) return false;
-    frames_[(head_ + count_++) % frames_.size()] = f;
-    return true;
-  }
-  bool pop(protocol::CanFrame& f) {
-    if (count_ == 0) return false;
-    f = frames_[head_];
-    head_ = (head_ + 1) % frames_.size();
-    --count_;
-    return true;
-  }
-
- private:
-  std::array<protocol::CanFrame, 64> frames_{};
-  std::size_t head_ = 0, count_ = 0;
-};
-
-struct BenchHal {
-  struct Encoder {
-    std::int32_t counts = 0;
-    std::uint32_t read_counts() const { return static_cast<std::uint32_t>(counts); }
-  } encoder_;
-  struct Force {
-    std::optional<fw::ForceReading> reading;
-    std::optional<fw::ForceReading> latest() const { return reading; }
-  } force_;
-  struct Motor {
-    fw::MotorCommand last;
-    void command(const fw::MotorCommand& c) { last = c; }
-    bool driver_fault() const { return false; }
-  } motor_;
-  struct Can {
-    RingQueue* rx = nullptr;
-    RingQueue* tx = nullptr;
-    bool receive(protocol::CanFrame& f) { return rx->pop(f); }
-    bool send(const protocol::CanFrame& f) { return tx->push(f); }
-  } can_;
-  Encoder& encoder() { return encoder_; }
-  Force& force() { return force_; }
-  Motor& motor() { return motor_; }
-  Can& can() { return can_; }
-};
-
-struct Plant {
-  double angle = 0.0, speed = 0.0;
-  void advance(double torque) {
-    for (int i = 0; i < 10; ++i) {
-      speed += (torque - 0.02 * speed) / 2e-3 * 1e-4;
-      angle += speed * 1e-4;
-    }
-  }
-};
 
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -122,56 +67,27 @@ struct RoleTimes {
   std::vector<double> hsi, top;
 };
 
-// One run of the pair: the operator moves the HSI back and forth into the TOP's wall, so both directions
-// carry deadband traffic, contact happens, and every code path of step() is exercised.
+// One run of the pair (bench_pair.hpp), each role's step timed on its own.
 RoleTimes run_pair(std::size_t ticks) {
-  RingQueue to_hsi, to_top;
-  BenchHal hsi_hal, top_hal;
-  hsi_hal.can_ = {&to_hsi, &to_top};
-  top_hal.can_ = {&to_top, &to_hsi};
-  fw::LeverConfig hsi_cfg, top_cfg;
-  hsi_cfg.role = protocol::Role::hsi;
-  hsi_cfg.use_force_sensor = false;
-  top_cfg.role = protocol::Role::top;
-  hsi_cfg.homing.method = fw::HomingMethod::absolute;  // the bench times the armed pair, not homing
-  top_cfg.homing.method = fw::HomingMethod::absolute;
-  fw::HsiLever<BenchHal> hsi(hsi_hal, hsi_cfg);
-  fw::TopLever<BenchHal> top(top_hal, top_cfg);
-  Plant hsi_plant, top_plant;
-  const double count = 2.0 * std::numbers::pi / 16384.0;
-
+  const auto pair = std::make_unique<bench::BenchPair<>>();
   RoleTimes times;
   times.hsi.reserve(ticks);
   times.top.reserve(ticks);
   for (fw::Tick now = 1; now <= ticks + 100; ++now) {
-    if (now == 80) {
-      protocol::CommandMessage arm;
-      to_hsi.push(protocol::pack(arm, 0));
-      to_top.push(protocol::pack(arm, 0));
-    }
-    const double target = 0.25 + 0.1 * std::sin(2.0 * std::numbers::pi * 0.5 * static_cast<double>(now) * 1e-3);
-    const double wall = top_plant.angle > 0.3 ? 200.0 * (top_plant.angle - 0.3) : 0.0;
-    hsi_plant.advance(3.0 * (target - hsi_plant.angle) - 0.15 * hsi_plant.speed +
-                      (hsi_hal.motor_.last.enable ? hsi_hal.motor_.last.torque_nm : 0.0));
-    top_plant.advance((top_hal.motor_.last.enable ? top_hal.motor_.last.torque_nm : 0.0) - wall);
-    hsi_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(hsi_plant.angle / count));
-    top_hal.encoder_.counts = static_cast<std::int32_t>(std::floor(top_plant.angle / count));
-    top_hal.force_.reading =
-        fw::ForceReading{static_cast<double>(std::lround(wall / 0.1 / (100.0 / 65536.0))), now, false};
-
+    pair->before_step(now);
     const auto t0 = Clock::now();
-    hsi.step(now);
+    pair->hsi.step(now);
     const auto t1 = Clock::now();
-    top.step(now);
+    pair->top.step(now);
     const auto t2 = Clock::now();
     if (now > 100) {  // armed and running
       times.hsi.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
       times.top.push_back(std::chrono::duration<double, std::nano>(t2 - t1).count());
     }
   }
-  if (!hsi.supervisor().armed() || !top.supervisor().armed()) {
+  if (!pair->armed()) {
     fmt::print(stderr, "lever-bench-core: the pair did not stay armed (faults hsi {} top {})\n",
-               hsi.supervisor().latched(), top.supervisor().latched());
+               pair->hsi.supervisor().latched(), pair->top.supervisor().latched());
     std::exit(1);
   }
   return times;
@@ -217,7 +133,8 @@ int main(int argc, char** argv) {
           {"mean", median(top_means)},
           {"p99", median(top_p99)},
           {"means", top_means}}}}},
-      {"static_bytes_per_lever", {{"hsi", sizeof(fw::HsiLever<BenchHal>)}, {"top", sizeof(fw::TopLever<BenchHal>)}}},
+      {"static_bytes_per_lever",
+       {{"hsi", sizeof(fw::HsiLever<bench::BenchHal>)}, {"top", sizeof(fw::TopLever<bench::BenchHal>)}}},
       {"static_bytes_note", "sizeof(Lever<Hal, Role>): all state of one lever; the HAL it refers to is the board's"},
   };
   fmt::print("{}\n", out.dump(2));
