@@ -1,0 +1,273 @@
+// lever-bench-loop: the wake-up latency of the board's real-time loop (RealtimeLoop) beside cyclictest's, on this
+// machine, in one run: first the loop serving an HSI/TOP pair of the real firmware core (bench_pair.hpp) for
+// --seconds, then cyclictest for as many periods at the same period, priority, memory locking and CPUs. Prints
+// one JSON object. A benchmark, not a test: the goals (p99 within 1.5x cyclictest's, no page faults in the
+// steady part) are reported, never asserted.
+//
+// Both histograms count whole microseconds from the intended wake-up, truncated, and take the nearest-rank
+// percentile the same way (LatencyHistogram). cyclictest is run with --default-system: it then leaves
+// /dev/cpu_dma_latency alone, as the loop does, so both see the same power management (--cyclictest-tunes-pm
+// lets it hold the CPUs out of deep idle states, as it does by default).
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stop_token>
+#include <string>
+#include <vector>
+
+#include "bench_pair.hpp"
+#include "lever/linux/latency_histogram.hpp"
+#include "lever/linux/realtime_loop.hpp"
+
+extern char** environ;
+
+namespace {
+
+using namespace lever;
+using linux_io::LatencyHistogram;
+
+// The board's HAL has a step clock; with it the core measures its own step times.
+struct ClockedHal : bench::BenchHal {
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(linux_io::RealtimeLoop::monotonic_ns()); }
+};
+
+using Json = nlohmann::ordered_json;
+
+Json figures(const LatencyHistogram& h) {
+  return {{"p50", h.percentile_us(0.50)},
+          {"p99", h.percentile_us(0.99)},
+          {"max", h.max_us()},
+          {"samples", h.count()},
+          {"overflows", h.overflows()}};
+}
+
+std::string cpu_list_text(const std::vector<unsigned>& cpus) {
+  std::string text;
+  for (const unsigned cpu : cpus) text += (text.empty() ? "" : ",") + std::to_string(cpu);
+  return text;
+}
+
+struct CyclictestRun {
+  std::vector<std::string> argv;
+  std::optional<LatencyHistogram> histogram;
+  std::string error;
+};
+
+// Runs cyclictest with its histogram (1 us bins up to the LatencyHistogram's) into a JSON file, and reads the
+// bins back; cyclictest's own overflow count is its cycles less what the bins hold.
+CyclictestRun run_cyclictest(const std::string& program, std::int64_t period_us, std::uint64_t loops, int priority,
+                             bool lock_memory, const std::vector<unsigned>& cpus, bool tunes_pm) {
+  CyclictestRun run;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("lever-bench-loop-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string json_path = (dir / "cyclictest.json").string();
+  const std::string log_path = (dir / "cyclictest.log").string();
+  run.argv = {program,
+              "-q",
+              "-p",
+              std::to_string(priority),
+              "-i",
+              std::to_string(period_us),
+              "-l",
+              std::to_string(loops),
+              "-h",
+              std::to_string(LatencyHistogram::kBins),
+              "--json=" + json_path};
+  if (lock_memory) run.argv.push_back("-m");
+  if (!cpus.empty()) run.argv.push_back("-a" + cpu_list_text(cpus));
+  if (!tunes_pm) run.argv.push_back("--default-system");
+
+  std::vector<char*> argv;
+  for (auto& a : run.argv) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  // The histogram dump goes to stdout: this program's stdout is its JSON.
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  int status = 0;
+  if (spawned != 0) {
+    run.error = "cannot run " + program + " (Debian package rt-tests; scripts/setup installs it)";
+  } else if (::waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::ifstream log(log_path);
+    std::string first;
+    std::getline(log, first);
+    run.error = program + " failed (status " + std::to_string(status) + "): " + first;
+  } else {
+    try {
+      std::ifstream in(json_path);
+      const auto j = nlohmann::json::parse(in);
+      const auto& thread = j.at("thread").at("0");
+      LatencyHistogram h;
+      std::uint64_t binned = 0;
+      for (const auto& [us, count] : thread.at("histogram").items()) {
+        h.add_us(std::stoull(us), count.get<std::uint64_t>());
+        binned += count.get<std::uint64_t>();
+      }
+      const auto cycles = thread.at("cycles").get<std::uint64_t>();
+      const auto max_us = thread.at("max").get<std::uint64_t>();
+      if (cycles > binned) h.add_us(std::max<std::uint64_t>(max_us, LatencyHistogram::kBins), cycles - binned);
+      h.note_max_us(max_us);
+      run.histogram = h;
+    } catch (const std::exception& e) {
+      run.error = std::string("cannot read cyclictest's JSON: ") + e.what();
+    }
+  }
+  std::error_code ignored;
+  std::filesystem::remove_all(dir, ignored);
+  return run;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Wake-up latency of the real-time loop beside cyclictest's, same period and priority; prints JSON."};
+  app.name("lever-bench-loop");
+  double seconds = 10.0;
+  std::int64_t period_us = 1000;
+  int priority = 80;
+  std::string cpus_text;
+  std::string step_kind = "pair";
+  std::string cyclictest = "cyclictest";
+  bool no_lock = false;
+  bool tunes_pm = false;
+  app.add_option("--seconds", seconds, "how long each of the two runs")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->default_str("10");
+  app.add_option("--period-us", period_us, "loop period")->check(CLI::Range(50, 1'000'000))->default_str("1000");
+  app.add_option("--priority", priority, "SCHED_FIFO priority, 0 for none")
+      ->check(CLI::Range(0, 99))
+      ->default_str("80");
+  app.add_option("--cpus", cpus_text, "CPU list for both, as taskset takes it (\"1\", \"0,2-3\")");
+  app.add_option("--step", step_kind, "what the loop runs: pair (an HSI/TOP pair of the core) or trivial")
+      ->check(CLI::IsMember({"pair", "trivial"}))
+      ->default_str("pair");
+  app.add_option("--cyclictest", cyclictest, "the cyclictest program")->default_str("cyclictest");
+  app.add_flag("--no-mlock", no_lock, "lock no memory, in either");
+  app.add_flag("--cyclictest-tunes-pm", tunes_pm,
+               "let cyclictest hold /dev/cpu_dma_latency at 0, as it does by default");
+  CLI11_PARSE(app, argc, argv);
+
+  linux_io::RealtimeConfig config;
+  config.period = std::chrono::microseconds(period_us);
+  config.fifo_priority = priority;
+  config.lock_memory = !no_lock;
+  if (!cpus_text.empty()) {
+    const auto cpus = linux_io::parse_cpu_list(cpus_text);
+    if (!cpus) {
+      std::fprintf(stderr, "lever-bench-loop: --cpus \"%s\" is no CPU list\n", cpus_text.c_str());
+      return 2;
+    }
+    config.cpus = *cpus;
+  }
+  const auto periods = static_cast<std::uint64_t>(seconds * 1e6 / static_cast<double>(period_us));
+  // Everything the step touches exists before the loop starts (and is locked with it).
+  const auto pair = std::make_unique<bench::BenchPair<ClockedHal>>();
+
+  Json runner_us, runner, core, granted, minor_faults = nullptr, major_faults = nullptr;
+  bool privileged = false;
+  std::string warning;
+  const bool with_pair = step_kind == "pair";
+  {
+    auto opened = linux_io::RealtimeLoop::open(config);
+    if (!opened) {
+      std::fprintf(stderr, "lever-bench-loop: %s\n", opened.error().message.c_str());
+      return 2;
+    }
+    linux_io::RealtimeLoop& loop = opened.value();
+    if (!loop.privileged()) std::fprintf(stderr, "lever-bench-loop: %s\n", loop.warning().c_str());
+    std::stop_source stop;
+    std::uint64_t trivial_sum = 0;
+    loop.run(
+        [&](fw::Tick tick) {
+          if (with_pair) {
+            pair->before_step(tick);
+            pair->hsi.step(tick);
+            pair->top.step(tick);
+          } else {
+            trivial_sum += tick;
+          }
+          if (tick >= periods) stop.request_stop();
+        },
+        stop.get_token());
+    const auto& stats = loop.stats();
+    privileged = loop.privileged();
+    warning = loop.warning();
+    granted = {{"fifo_priority", loop.grants().fifo_priority},
+               {"memory_locked", loop.grants().memory_locked},
+               {"stack_prefaulted_bytes", loop.grants().stack_prefaulted_bytes}};
+    runner_us = figures(stats.wake_latency);
+    runner = {{"steps", stats.steps},
+              {"late_wakes", stats.late_wakes},
+              {"skipped_periods", stats.skipped_periods},
+              {"long_steps", stats.long_steps},
+              {"worst_step_us", static_cast<double>(stats.worst_step_ns) / 1e3}};
+    if (stats.minor_faults_steady) minor_faults = *stats.minor_faults_steady;
+    if (stats.major_faults_steady) major_faults = *stats.major_faults_steady;
+    if (with_pair) {
+      const auto& hsi = pair->hsi.timing().stats();
+      const auto& top = pair->top.timing().stats();
+      core = {{"armed", pair->armed()},
+              {"hsi_overruns", hsi.overruns},
+              {"top_overruns", top.overruns},
+              {"worst_interval_ticks", std::max(hsi.worst_interval, top.worst_interval)},
+              {"worst_step_us", static_cast<double>(std::max(hsi.worst_step_ns, top.worst_step_ns)) / 1e3}};
+    } else {
+      core = {{"trivial_sum", trivial_sum}};  // so the trivial step is not optimised away
+    }
+  }  // the loop gives back its scheduling and memory before cyclictest starts
+
+  const CyclictestRun reference =
+      run_cyclictest(cyclictest, period_us, periods, priority, config.lock_memory, config.cpus, tunes_pm);
+  std::string command;
+  for (const auto& a : reference.argv) command += (command.empty() ? "" : " ") + a;
+
+  Json out;
+  out["period_us"] = period_us;
+  out["priority"] = priority;
+  out["seconds"] = seconds;
+  out["step"] = with_pair ? "HSI/TOP pair of the firmware core, in-memory HAL" : "trivial";
+  out["runner_us"] = runner_us;
+  int exit_code = 0;
+  if (reference.histogram) {
+    const auto runner_p99 = runner_us["p99"].get<std::uint64_t>();
+    const auto reference_p99 = reference.histogram->percentile_us(0.99);
+    out["cyclictest_us"] = figures(*reference.histogram);
+    out["ratio_p99"] =
+        reference_p99 > 0 ? Json(static_cast<double>(runner_p99) / static_cast<double>(reference_p99)) : Json(nullptr);
+    out["goals"] = {{"p99_within_1_5x_cyclictest",
+                     reference_p99 > 0 && static_cast<double>(runner_p99) <= 1.5 * static_cast<double>(reference_p99)},
+                    {"no_minor_faults_steady", minor_faults == 0}};
+  } else {
+    out["cyclictest_us"] = nullptr;
+    out["cyclictest_error"] = reference.error;
+    exit_code = 1;
+  }
+  out["minor_faults_steady"] = minor_faults;
+  out["major_faults_steady"] = major_faults;
+  out["privileged"] = privileged;
+  out["warning"] = warning;
+  out["runner"] = runner;
+  out["core"] = core;
+  out["granted"] = granted;
+  out["cpus"] = cpu_list_text(config.cpus);
+  out["mlock"] = config.lock_memory;
+  out["cyclictest_command"] = command;
+  std::printf("%s\n", out.dump(2).c_str());
+  return exit_code;
+}
