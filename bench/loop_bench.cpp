@@ -222,7 +222,12 @@ int main(int argc, char** argv) {
     if (with_pair) {
       const auto& hsi = pair->hsi.timing().stats();
       const auto& top = pair->top.timing().stats();
+      const auto latched =
+          static_cast<protocol::FaultBits>(pair->hsi.supervisor().latched() | pair->top.supervisor().latched());
+      // A wake-up more than 5 periods late latches TIMING: the pair is then no longer armed.
       core = {{"armed", pair->armed()},
+              {"timing_fault", protocol::has(latched, protocol::Fault::timing)},
+              {"latched_fault_bits", latched},
               {"hsi_overruns", hsi.overruns},
               {"top_overruns", top.overruns},
               {"worst_interval_ticks", std::max(hsi.worst_interval, top.worst_interval)},
