@@ -1,6 +1,6 @@
 // lever-bench-loop: the wake-up latency of the board's real-time loop (RealtimeLoop) beside cyclictest's, on this
-// machine, in one run: first the loop serving an HSI/TOP pair of the real firmware core (bench_pair.hpp) for
-// --seconds, then cyclictest for as many periods at the same period, priority, memory locking and CPUs. Prints
+// machine, in one run: the loop serving an HSI/TOP pair of the real firmware core (bench_pair.hpp), and cyclictest
+// at the same period, priority, memory locking and CPUs, --seconds each, taking turns in --rounds (ABBA...). Prints
 // one JSON object. A benchmark, not a test: the goals (p99 within 1.5x cyclictest's, no page faults in the
 // steady part) are reported, never asserted.
 //
@@ -133,6 +133,79 @@ CyclictestRun run_cyclictest(const std::string& program, std::int64_t period_us,
   return run;
 }
 
+// What the loop's rounds add up to.
+struct RunnerTotals {
+  LatencyHistogram latency;
+  std::uint64_t steps = 0, late_wakes = 0, skipped_periods = 0, long_steps = 0;
+  std::int64_t worst_step_ns = 0;
+  std::optional<long> minor_faults = 0, major_faults = 0;  // empty if a round ended before its steady part
+  bool privileged = true;
+  std::string warning;
+  Json granted;
+  // The pair (or the trivial step's sum, so that it is not optimised away).
+  bool armed_every_round = true;
+  protocol::FaultBits latched = 0;
+  std::uint32_t core_overruns = 0;
+  fw::Tick worst_interval = 0;
+  std::uint64_t worst_core_step_ns = 0;
+  std::uint64_t trivial_sum = 0;
+};
+
+// One round of the loop, `periods` long, serving a fresh pair (it arms at tick 80: ticks start again at 1).
+std::optional<std::string> run_loop_round(const linux_io::RealtimeConfig& config, std::uint64_t periods, bool with_pair,
+                                          RunnerTotals& totals) {
+  // Everything the step touches exists before the loop starts (and is locked with it).
+  const auto pair = std::make_unique<bench::BenchPair<ClockedHal>>();
+  auto opened = linux_io::RealtimeLoop::open(config);
+  if (!opened) return opened.error().message;
+  linux_io::RealtimeLoop& loop = opened.value();
+  std::stop_source stop;
+  std::uint64_t trivial_sum = 0;
+  loop.run(
+      [&](fw::Tick tick) {
+        if (with_pair) {
+          pair->before_step(tick);
+          pair->hsi.step(tick);
+          pair->top.step(tick);
+        } else {
+          trivial_sum += tick;
+        }
+        if (tick >= periods) stop.request_stop();
+      },
+      stop.get_token());
+  const auto& stats = loop.stats();
+  totals.latency.add(stats.wake_latency);
+  totals.steps += stats.steps;
+  totals.late_wakes += stats.late_wakes;
+  totals.skipped_periods += stats.skipped_periods;
+  totals.long_steps += stats.long_steps;
+  totals.worst_step_ns = std::max(totals.worst_step_ns, stats.worst_step_ns);
+  if (totals.minor_faults && stats.minor_faults_steady) {
+    *totals.minor_faults += *stats.minor_faults_steady;
+    *totals.major_faults += stats.major_faults_steady.value_or(0);
+  } else {
+    totals.minor_faults.reset();
+    totals.major_faults.reset();
+  }
+  totals.privileged = loop.privileged();
+  totals.warning = loop.warning();
+  totals.granted = {{"fifo_priority", loop.grants().fifo_priority},
+                    {"memory_locked", loop.grants().memory_locked},
+                    {"stack_prefaulted_bytes", loop.grants().stack_prefaulted_bytes}};
+  if (with_pair) {
+    const auto& hsi = pair->hsi.timing().stats();
+    const auto& top = pair->top.timing().stats();
+    totals.armed_every_round = totals.armed_every_round && pair->armed();
+    totals.latched |=
+        static_cast<protocol::FaultBits>(pair->hsi.supervisor().latched() | pair->top.supervisor().latched());
+    totals.core_overruns += hsi.overruns + top.overruns;
+    totals.worst_interval = std::max({totals.worst_interval, hsi.worst_interval, top.worst_interval});
+    totals.worst_core_step_ns = std::max({totals.worst_core_step_ns, hsi.worst_step_ns, top.worst_step_ns});
+  }
+  totals.trivial_sum += trivial_sum;
+  return std::nullopt;
+}  // the loop gives back its scheduling and memory before cyclictest runs
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -146,9 +219,13 @@ int main(int argc, char** argv) {
   std::string cyclictest = "cyclictest";
   bool no_lock = false;
   bool tunes_pm = false;
-  app.add_option("--seconds", seconds, "how long each of the two runs")
+  int rounds = 4;
+  app.add_option("--seconds", seconds, "how long each of the two, in all")
       ->check(CLI::Range(0.1, 3600.0))
       ->default_str("10");
+  app.add_option("--rounds", rounds, "alternations of the loop and cyclictest (ABBA...)")
+      ->check(CLI::Range(1, 100))
+      ->default_str("4");
   app.add_option("--period-us", period_us, "loop period")->check(CLI::Range(50, 1'000'000))->default_str("1000");
   app.add_option("--priority", priority, "SCHED_FIFO priority, 0 for none")
       ->check(CLI::Range(0, 99))
@@ -175,84 +252,53 @@ int main(int argc, char** argv) {
     }
     config.cpus = *cpus;
   }
-  const auto periods = static_cast<std::uint64_t>(seconds * 1e6 / static_cast<double>(period_us));
-  // Everything the step touches exists before the loop starts (and is locked with it).
-  const auto pair = std::make_unique<bench::BenchPair<ClockedHal>>();
-
-  Json runner_us, runner, core, granted, minor_faults = nullptr, major_faults = nullptr;
-  bool privileged = false;
-  std::string warning;
+  const auto periods = static_cast<std::uint64_t>(seconds * 1e6 / static_cast<double>(period_us) / rounds);
   const bool with_pair = step_kind == "pair";
-  {
-    auto opened = linux_io::RealtimeLoop::open(config);
-    if (!opened) {
-      std::fprintf(stderr, "lever-bench-loop: %s\n", opened.error().message.c_str());
-      return 2;
-    }
-    linux_io::RealtimeLoop& loop = opened.value();
-    if (!loop.privileged()) std::fprintf(stderr, "lever-bench-loop: %s\n", loop.warning().c_str());
-    std::stop_source stop;
-    std::uint64_t trivial_sum = 0;
-    loop.run(
-        [&](fw::Tick tick) {
-          if (with_pair) {
-            pair->before_step(tick);
-            pair->hsi.step(tick);
-            pair->top.step(tick);
-          } else {
-            trivial_sum += tick;
-          }
-          if (tick >= periods) stop.request_stop();
-        },
-        stop.get_token());
-    const auto& stats = loop.stats();
-    privileged = loop.privileged();
-    warning = loop.warning();
-    granted = {{"fifo_priority", loop.grants().fifo_priority},
-               {"memory_locked", loop.grants().memory_locked},
-               {"stack_prefaulted_bytes", loop.grants().stack_prefaulted_bytes}};
-    runner_us = figures(stats.wake_latency);
-    runner = {{"steps", stats.steps},
-              {"late_wakes", stats.late_wakes},
-              {"skipped_periods", stats.skipped_periods},
-              {"long_steps", stats.long_steps},
-              {"worst_step_us", static_cast<double>(stats.worst_step_ns) / 1e3}};
-    if (stats.minor_faults_steady) minor_faults = *stats.minor_faults_steady;
-    if (stats.major_faults_steady) major_faults = *stats.major_faults_steady;
-    if (with_pair) {
-      const auto& hsi = pair->hsi.timing().stats();
-      const auto& top = pair->top.timing().stats();
-      const auto latched =
-          static_cast<protocol::FaultBits>(pair->hsi.supervisor().latched() | pair->top.supervisor().latched());
-      // A wake-up more than 5 periods late latches TIMING: the pair is then no longer armed.
-      core = {{"armed", pair->armed()},
-              {"timing_fault", protocol::has(latched, protocol::Fault::timing)},
-              {"latched_fault_bits", latched},
-              {"hsi_overruns", hsi.overruns},
-              {"top_overruns", top.overruns},
-              {"worst_interval_ticks", std::max(hsi.worst_interval, top.worst_interval)},
-              {"worst_step_us", static_cast<double>(std::max(hsi.worst_step_ns, top.worst_step_ns)) / 1e3}};
-    } else {
-      core = {{"trivial_sum", trivial_sum}};  // so the trivial step is not optimised away
-    }
-  }  // the loop gives back its scheduling and memory before cyclictest starts
 
-  const CyclictestRun reference =
-      run_cyclictest(cyclictest, period_us, periods, priority, config.lock_memory, config.cpus, tunes_pm);
-  std::string command;
-  for (const auto& a : reference.argv) command += (command.empty() ? "" : " ") + a;
+  // Rounds in the order ABBA..., so that a machine that gets busier or quieter over the run weighs on both alike.
+  RunnerTotals runner;
+  LatencyHistogram reference;
+  std::string reference_error, command;
+  bool warned = false;
+  for (int round = 0; round < rounds; ++round) {
+    for (int half = 0; half < 2; ++half) {
+      const bool loop_now = (half == 0) == (round % 2 == 0);
+      if (loop_now) {
+        if (const auto error = run_loop_round(config, periods, with_pair, runner)) {
+          std::fprintf(stderr, "lever-bench-loop: %s\n", error->c_str());
+          return 2;
+        }
+        if (!runner.privileged && !warned) {
+          std::fprintf(stderr, "lever-bench-loop: %s\n", runner.warning.c_str());
+          warned = true;
+        }
+      } else if (reference_error.empty()) {
+        const CyclictestRun run =
+            run_cyclictest(cyclictest, period_us, periods, priority, config.lock_memory, config.cpus, tunes_pm);
+        command.clear();
+        for (const auto& a : run.argv) command += (command.empty() ? "" : " ") + a;
+        if (run.histogram) {
+          reference.add(*run.histogram);
+        } else {
+          reference_error = run.error;
+        }
+      }
+    }
+  }
 
   Json out;
   out["period_us"] = period_us;
   out["priority"] = priority;
   out["seconds"] = seconds;
+  out["rounds"] = rounds;
   out["step"] = with_pair ? "HSI/TOP pair of the firmware core, in-memory HAL" : "trivial";
-  out["runner_us"] = runner_us;
+  out["runner_us"] = figures(runner.latency);
+  const Json minor_faults = runner.minor_faults ? Json(*runner.minor_faults) : Json(nullptr);
   int exit_code = 0;
-  if (reference.histogram) {
-    const auto runner_p99 = runner_us["p99"].get<std::uint64_t>();
-    const auto reference_p99 = reference.histogram->percentile_us(0.99);
-    out["cyclictest_us"] = figures(*reference.histogram);
+  if (reference_error.empty()) {
+    const std::uint64_t runner_p99 = runner.latency.percentile_us(0.99);
+    const std::uint64_t reference_p99 = reference.percentile_us(0.99);
+    out["cyclictest_us"] = figures(reference);
     out["ratio_p99"] =
         reference_p99 > 0 ? Json(static_cast<double>(runner_p99) / static_cast<double>(reference_p99)) : Json(nullptr);
     out["goals"] = {{"p99_within_1_5x_cyclictest",
@@ -260,16 +306,30 @@ int main(int argc, char** argv) {
                     {"no_minor_faults_steady", minor_faults == 0}};
   } else {
     out["cyclictest_us"] = nullptr;
-    out["cyclictest_error"] = reference.error;
+    out["cyclictest_error"] = reference_error;
     exit_code = 1;
   }
   out["minor_faults_steady"] = minor_faults;
-  out["major_faults_steady"] = major_faults;
-  out["privileged"] = privileged;
-  out["warning"] = warning;
-  out["runner"] = runner;
-  out["core"] = core;
-  out["granted"] = granted;
+  out["major_faults_steady"] = runner.major_faults ? Json(*runner.major_faults) : Json(nullptr);
+  out["privileged"] = runner.privileged;
+  out["warning"] = runner.warning;
+  out["runner"] = {{"steps", runner.steps},
+                   {"late_wakes", runner.late_wakes},
+                   {"skipped_periods", runner.skipped_periods},
+                   {"long_steps", runner.long_steps},
+                   {"worst_step_us", static_cast<double>(runner.worst_step_ns) / 1e3}};
+  if (with_pair) {
+    // A wake-up more than 5 periods late latches TIMING: the pair is then no longer armed.
+    out["core"] = {{"armed_every_round", runner.armed_every_round},
+                   {"timing_fault", protocol::has(runner.latched, protocol::Fault::timing)},
+                   {"latched_fault_bits", runner.latched},
+                   {"overruns", runner.core_overruns},
+                   {"worst_interval_ticks", runner.worst_interval},
+                   {"worst_step_us", static_cast<double>(runner.worst_core_step_ns) / 1e3}};
+  } else {
+    out["trivial_sum"] = runner.trivial_sum;
+  }
+  out["granted"] = runner.granted;
   out["cpus"] = cpu_list_text(config.cpus);
   out["mlock"] = config.lock_memory;
   out["cyclictest_command"] = command;

@@ -88,6 +88,13 @@ TEST_CASE("LatencyHistogram: nearest-rank percentiles of 1 us bins, truncated as
   CHECK(imported.percentile_us(0.5) == 3);
   CHECK(imported.percentile_us(0.99) == 40);
   CHECK(imported.max_us() == 6123);
+
+  LatencyHistogram merged = three;
+  merged.add(late);
+  CHECK(merged.count() == 103);
+  CHECK(merged.overflows() == 2);
+  CHECK(merged.percentile_us(0.5) == 10);
+  CHECK(merged.max_us() == 9300);
 }
 
 TEST_CASE("PeriodTracker: each wake-up serves the latest tick due, skipping the ones missed whole", "[loop]") {

@@ -28,6 +28,13 @@ void LatencyHistogram::add_us(std::uint64_t us, std::uint64_t count) noexcept {
   max_ns_ = std::max(max_ns_, us * 1000);
 }
 
+void LatencyHistogram::add(const LatencyHistogram& other) noexcept {
+  for (std::size_t us = 0; us < kBins; ++us) bins_[us] += other.bins_[us];
+  overflows_ += other.overflows_;
+  count_ += other.count_;
+  max_ns_ = std::max(max_ns_, other.max_ns_);
+}
+
 void LatencyHistogram::note_max_us(std::uint64_t us) noexcept { max_ns_ = std::max(max_ns_, us * 1000); }
 
 void LatencyHistogram::clear() noexcept { *this = LatencyHistogram{}; }

@@ -16,6 +16,8 @@ class LatencyHistogram {
   void record_ns(std::int64_t latency_ns) noexcept;  // a negative latency counts as 0
   // `count` latencies of `us` microseconds, from another tool's histogram.
   void add_us(std::uint64_t us, std::uint64_t count) noexcept;
+  // Another histogram's latencies, as if recorded here (runs in rounds).
+  void add(const LatencyHistogram& other) noexcept;
   // The exact worst latency when it is known apart from the bins (cyclictest reports it).
   void note_max_us(std::uint64_t us) noexcept;
   void clear() noexcept;
