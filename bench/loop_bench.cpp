@@ -1,8 +1,8 @@
 // lever-bench-loop: the wake-up latency of the board's real-time loop (RealtimeLoop) beside cyclictest's, on this
 // machine, in one run: the loop serving an HSI/TOP pair of the real firmware core (bench_pair.hpp), and cyclictest
-// at the same period, priority, memory locking and CPUs, --seconds each, taking turns in --rounds (ABBA...). Prints
-// one JSON object. A benchmark, not a test: the goals (p99 within 1.5x cyclictest's, no page faults in the
-// steady part) are reported, never asserted.
+// at the same period, priority, memory locking and CPUs (those the loop was granted: without privileges both run
+// best-effort), --seconds each, taking turns in --rounds (ABBA...). Prints one JSON object. A benchmark, not a test:
+// the goals (p99 within 1.5x cyclictest's, no page faults in the steady part) are reported, never asserted.
 //
 // Both histograms count whole microseconds from the intended wake-up, truncated, and take the nearest-rank
 // percentile the same way (LatencyHistogram). cyclictest is run with --default-system: it then leaves
@@ -76,8 +76,6 @@ CyclictestRun run_cyclictest(const std::string& program, std::int64_t period_us,
   const std::string log_path = (dir / "cyclictest.log").string();
   run.argv = {program,
               "-q",
-              "-p",
-              std::to_string(priority),
               "-i",
               std::to_string(period_us),
               "-l",
@@ -85,6 +83,11 @@ CyclictestRun run_cyclictest(const std::string& program, std::int64_t period_us,
               "-h",
               std::to_string(LatencyHistogram::kBins),
               "--json=" + json_path};
+  if (priority > 0) {
+    run.argv.push_back("-p" + std::to_string(priority));
+  } else {
+    run.argv.push_back("--policy=other");  // "-p 0" with a histogram still asks for SCHED_FIFO
+  }
   if (lock_memory) run.argv.push_back("-m");
   if (!cpus.empty()) run.argv.push_back("-a" + cpu_list_text(cpus));
   if (!tunes_pm) run.argv.push_back("--default-system");
@@ -142,6 +145,8 @@ struct RunnerTotals {
   bool privileged = true;
   std::string warning;
   Json granted;
+  int granted_priority = 0;
+  bool memory_locked = false;
   // The pair (or the trivial step's sum, so that it is not optimised away).
   bool armed_every_round = true;
   protocol::FaultBits latched = 0;
@@ -189,6 +194,8 @@ std::optional<std::string> run_loop_round(const linux_io::RealtimeConfig& config
   }
   totals.privileged = loop.privileged();
   totals.warning = loop.warning();
+  totals.granted_priority = loop.grants().fifo_priority;
+  totals.memory_locked = loop.grants().memory_locked;
   totals.granted = {{"fifo_priority", loop.grants().fifo_priority},
                     {"memory_locked", loop.grants().memory_locked},
                     {"stack_prefaulted_bytes", loop.grants().stack_prefaulted_bytes}};
@@ -273,8 +280,9 @@ int main(int argc, char** argv) {
           warned = true;
         }
       } else if (reference_error.empty()) {
-        const CyclictestRun run =
-            run_cyclictest(cyclictest, period_us, periods, priority, config.lock_memory, config.cpus, tunes_pm);
+        // As the loop was granted (it runs first): unprivileged, cyclictest would refuse to start at all.
+        const CyclictestRun run = run_cyclictest(cyclictest, period_us, periods, runner.granted_priority,
+                                                 runner.memory_locked, config.cpus, tunes_pm);
         command.clear();
         for (const auto& a : run.argv) command += (command.empty() ? "" : " ") + a;
         if (run.histogram) {
