@@ -24,10 +24,12 @@ struct PwmMotor::Impl {
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
 
+  // Stopped before leaving the emergency stop's table: no moment without one or the other. The files close
+  // after this body, once the table no longer holds them.
   ~Impl() {
-    unregister_motor_stop(stop_slot);
     lines.set_enabled(false);
     pwm.stop();
+    unregister_motor_stop(stop_slot);
   }
 
   bool drive(DutySetpoint setpoint) noexcept {
