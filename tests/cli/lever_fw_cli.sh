@@ -55,6 +55,13 @@ for role in hsi top; do
   check "example $role.toml: the printed configuration loads back to itself" cmp -s "$work/$role.toml" "$work/$role.again"
   check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
 done
+# The examples are every key at its default: they cannot drift from the program.
+: >"$work/empty.toml"
+for role in hsi top; do
+  "$fw" --config "$work/empty.toml" --role "$role" --check-config | sed 1d >"$work/defaults.$role"
+  sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
+  check "example $role.toml lists every key at its default" cmp -s "$work/defaults.$role" "$work/example.$role"
+done
 "$fw" --config "$examples/hsi.toml" --role top --check-config | grep -q '^role = "top"'
 check "--role overrides the file" test $? -eq 0
 
