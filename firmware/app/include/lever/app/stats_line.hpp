@@ -46,6 +46,7 @@ nlohmann::json stats_line(const Lever& lever, fw::Tick now, const BoardStats& bo
       {"refresh_sent", c.refresh_sent},
       {"overruns", lever.timing().stats().overruns},
       {"worst_step_interval_ms", lever.timing().stats().worst_interval},
+      {"worst_step_us", static_cast<double>(lever.timing().stats().worst_step_ns) * 1e-3},
       {"wakeup_latency_us",
        {{"p50", optional(board.wakeup_p50_us)},
         {"p99", optional(board.wakeup_p99_us)},
