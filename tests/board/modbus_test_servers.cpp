@@ -83,6 +83,8 @@ TcpTestServer::TcpTestServer(const std::string& host, int port, int register_cou
 TcpTestServer::~TcpTestServer() {
   thread_.request_stop();
   thread_.join();
+  // The listener first: a client that sees its connection close and reconnects at once must be refused.
+  listener_.reset();
   modbus_close(context_);  // the accepted connection, if any
   modbus_free(context_);
 }
