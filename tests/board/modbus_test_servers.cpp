@@ -202,6 +202,8 @@ void BadCrcRtuResponder::run(const std::stop_token& stop) {
       if (spoil_next) crc = static_cast<std::uint16_t>(crc ^ 0x0101);
       answer.push_back(static_cast<std::uint8_t>(crc & 0xFF));
       answer.push_back(static_cast<std::uint8_t>(crc >> 8));
+      // Line noise after a spoiled frame: unless the reader drops it, it becomes the start of the next answer.
+      if (spoil_next) answer.insert(answer.end(), {0xFF, 0x00, 0xAA});
       if (::write(pty_.master(), answer.data(), answer.size()) != static_cast<ssize_t>(answer.size())) continue;
       (spoil_next ? corrupted_ : good_).fetch_add(1);
       spoil_next = !spoil_next;

@@ -95,7 +95,8 @@ class RtuTestServer final : public ModbusTestServer {
 };
 
 // Answers read-register requests on a pty with `words`, by hand, and spoils the CRC of every other answer
-// (the first included): the gauge must count the bad ones and take the good ones.
+// (the first included), with a few bytes of noise after it: the gauge must count the bad ones, drop the
+// noise, and take the good ones.
 class BadCrcRtuResponder {
  public:
   BadCrcRtuResponder(std::uint16_t word0, std::uint16_t word1);

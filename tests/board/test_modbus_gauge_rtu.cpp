@@ -102,7 +102,7 @@ TEST_CASE("RTU: frames with a bad CRC are counted and dropped, the good ones bet
   CHECK(counters.timeouts == 0);
   CHECK(counters.reconnects == 0);  // a bad frame is noise on a working line, not a lost connection
   CHECK(counters.connected);
-  CHECK(counters.errors >= counters.crc_errors);
+  CHECK(counters.errors == counters.crc_errors);  // the noise after each bad frame cost nothing more
 }
 
 TEST_CASE("RTU: a device that does not exist is retried with backoff, without a sample or a crash") {

@@ -68,11 +68,12 @@ TEST_CASE(
   // answer before it has been taken: the newest sample is final.
   const auto received = server.requests_received();
   REQUIRE(eventually([&] { return server.requests_received() > received; }));
-  const GaugeSample frozen = *gauge.latest();
   const auto timeouts_before = gauge.counters().timeouts;
 
-  // The poll thread is inside modbus_read_registers; latest() must answer at once all the same.
+  // The poll thread is inside modbus_read_registers for the next 500 ms; latest() must answer at once all the
+  // same, the first call included.
   const auto start = std::chrono::steady_clock::now();
+  const GaugeSample frozen = *gauge.latest();
   constexpr int kCalls = 10'000;
   int same = 0;
   for (int i = 0; i < kCalls; ++i) {
@@ -128,6 +129,34 @@ TEST_CASE("TCP: a server that goes away and comes back on the same port is recon
   CHECK(counters.connected);
   CHECK(gauge.latest()->sequence > frozen.sequence);
   CHECK(gauge.latest()->monotonic_ns > frozen.monotonic_ns);
+}
+
+TEST_CASE("TCP: a good read resets the backoff, so after a long outage a short one costs only the first wait") {
+  auto server = std::make_unique<TcpTestServer>();
+  const int port = server->port();
+  hold_int32(*server, 1);
+  auto config = test_config(loopback(port), int32_at_zero());
+  config.reconnect_backoff_initial = 10ms;
+  config.reconnect_backoff_max = 400ms;
+  auto opened = ModbusGauge::open(config);
+  REQUIRE(opened.ok());
+  const ModbusGauge& gauge = opened.value();
+  REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == 1; }));
+
+  // A long outage: the wait doubles 10, 20, 40, ... until it reaches 400 ms.
+  server.reset();
+  REQUIRE(eventually([&] { return gauge.counters().connect_failures >= 6; }));
+  server = std::make_unique<TcpTestServer>("127.0.0.1", port);
+  hold_int32(*server, 2);
+  REQUIRE(eventually([&] { return gauge.latest()->raw == 2; }));
+
+  // A short one: the reads in between brought the wait back to 10 ms.
+  server.reset();
+  server = std::make_unique<TcpTestServer>("127.0.0.1", port);
+  hold_int32(*server, 3);
+  const auto back = std::chrono::steady_clock::now();
+  REQUIRE(eventually([&] { return gauge.latest()->raw == 3; }));
+  CHECK(std::chrono::steady_clock::now() - back < 200ms);
 }
 
 TEST_CASE("TCP: no server at start: the gauge exists, counts failed connects, and connects once one appears") {
