@@ -46,7 +46,9 @@ TEST_CASE(
     "answers again the gauge reopens the port and samples resume") {
   RtuTestServer server;
   server.set_holding(0, registers_for(-5, RegisterType::int32, WordOrder::high_first));
-  auto opened = ModbusGauge::open(test_config(serial(server.device()), int32_at_zero()));
+  auto config = test_config(serial(server.device()), int32_at_zero());
+  config.response_timeout = 50ms;
+  auto opened = ModbusGauge::open(config);
   REQUIRE(opened.ok());
   const ModbusGauge& gauge = opened.value();
   REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == -5; }));
