@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 namespace lever::test {
@@ -56,7 +57,9 @@ void ModbusTestServer::set_input(int address, std::span<const std::uint16_t> wor
 
 void ModbusTestServer::handle(modbus_t* context, const std::uint8_t* request, int length) {
   received_.fetch_add(1);
-  if (behaviour_.load() == ServerBehaviour::mute) return;
+  const ServerBehaviour behaviour = behaviour_.load();
+  if (behaviour == ServerBehaviour::mute) return;
+  if (behaviour == ServerBehaviour::late) std::this_thread::sleep_for(kLateAnswerDelay);
   std::lock_guard lock(mutex_);
   modbus_reply(context, request, length, mapping_.get());
 }

@@ -5,6 +5,7 @@
 #include <modbus.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -19,7 +20,9 @@ namespace lever::test {
 enum class ServerBehaviour : std::uint8_t {
   answer,  // modbus_reply: the registers, or an exception for an address outside the mapping
   mute,    // read each request and never answer, as an amplifier that hangs
+  late,    // answer each request kLateAnswerDelay after it came, as an amplifier that stalls
 };
+inline constexpr std::chrono::milliseconds kLateAnswerDelay{80};
 
 // The register tables and behaviour every server shares; tests change them while the server runs.
 class ModbusTestServer {

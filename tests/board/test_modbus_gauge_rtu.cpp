@@ -72,6 +72,38 @@ TEST_CASE(
   CHECK(counters.crc_errors == 0);
 }
 
+TEST_CASE("RTU: an answer that comes after its timeout is dropped, never taken for the next request's") {
+  RtuTestServer server;
+  server.set_holding(0, registers_for(1, RegisterType::int32, WordOrder::high_first));
+  auto config = test_config(serial(server.device()), int32_at_zero());
+  config.response_timeout = 50ms;
+  config.reconnect_backoff_initial = 250ms;  // the late answer (80 ms) lands while the port is closed
+  config.reconnect_backoff_max = 250ms;
+  auto opened = ModbusGauge::open(config);
+  REQUIRE(opened.ok());
+  const ModbusGauge& gauge = opened.value();
+  REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == 1; }));
+
+  // Every answer now comes too late, carrying 2. The pty keeps it (as a serial adapter's buffer may) until
+  // the gauge has reopened the port; taken then, it would pass for the answer to the next request.
+  server.set_holding(0, registers_for(2, RegisterType::int32, WordOrder::high_first));
+  server.set_behaviour(ServerBehaviour::late);
+  const auto frozen_sequence = gauge.latest()->sequence + 1;  // one answer may still have been on time
+  bool late_value_taken = false;
+  REQUIRE(eventually(
+      [&] {
+        late_value_taken = late_value_taken || gauge.latest()->sequence > frozen_sequence;
+        return gauge.counters().timeouts >= 3;
+      },
+      3s));
+  CHECK_FALSE(late_value_taken);
+
+  server.set_holding(0, registers_for(3, RegisterType::int32, WordOrder::high_first));
+  server.set_behaviour(ServerBehaviour::answer);
+  REQUIRE(eventually([&] { return gauge.latest()->raw == 3; }));
+  CHECK(gauge.counters().errors == gauge.counters().timeouts);
+}
+
 TEST_CASE("RTU: exception responses are counted and keep the port open") {
   RtuTestServer server(1, 4);
   auto map = int32_at_zero();
