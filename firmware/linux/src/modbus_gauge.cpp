@@ -11,6 +11,8 @@
 #include <condition_variable>
 #include <mutex>
 #include <span>
+#include <string>
+#include <system_error>
 #include <utility>
 
 #include "lever/linux/latest_value.hpp"
@@ -47,7 +49,6 @@ struct ModbusGauge::Shared {
   bool connect();
   void poll_once();
   void record_failure(int errno_value) noexcept;
-  bool drop_connection_and_back_off(const std::stop_token& stop);
   bool back_off(const std::stop_token& stop);
   bool sleep_until(const std::stop_token& stop, Clock::time_point deadline);
 
@@ -119,10 +120,9 @@ void ModbusGauge::Shared::poll_once() {
   const int count = register_count(map.type);
   std::array<std::uint16_t, 2> words{};
   bump(polls);
-  const int address = map.address;
   const int got = map.function == RegisterFunction::holding
-                      ? modbus_read_registers(context.get(), address, count, words.data())
-                      : modbus_read_input_registers(context.get(), address, count, words.data());
+                      ? modbus_read_registers(context.get(), map.address, count, words.data())
+                      : modbus_read_input_registers(context.get(), map.address, count, words.data());
   const std::int64_t arrived_ns = monotonic_ns();
   if (got != count) {
     const int errno_value = got == -1 ? errno : EMBBADDATA;
@@ -179,7 +179,11 @@ Result<ModbusGauge> ModbusGauge::open(const ModbusGaugeConfig& config) {
   if (auto problem = validate(config)) return Error{"modbus gauge: " + *problem, EINVAL};
   auto context = make_modbus_context(config);
   if (!context) return context.error();
-  return ModbusGauge(std::make_unique<Shared>(config, std::move(context).value()));
+  try {
+    return ModbusGauge(std::make_unique<Shared>(config, std::move(context).value()));
+  } catch (const std::system_error& failure) {  // std::jthread's way to say the thread could not start
+    return Error{std::string("modbus gauge: cannot start the poll thread: ") + failure.what(), failure.code().value()};
+  }
 }
 
 ModbusGauge::ModbusGauge(std::unique_ptr<Shared> shared)
