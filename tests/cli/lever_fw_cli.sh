@@ -47,6 +47,12 @@ bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]
 check "missing file: exit 2" test "$code" -eq 2
 check "missing file: says why" grep -q "missing.toml: cannot read: No such file" "$work/err"
 
+"$fw" --config "$examples/top-float32.toml" --check-config >"$work/f32"; code=$?
+check "example top-float32.toml is valid" test "$code" -eq 0
+check "example top-float32.toml reads a float32 from input registers" \
+  grep -qE '^(function = "input"|type = "float32")' "$work/f32"
+bad_config "a Modbus amplifier's host that is a name, not an address" "board.gauge" $'[board.gauge]\nhost = "amplifier.local"'
+bad_config "a baud rate that is not standard" "board.gauge" $'[board.gauge]\ntransport = "rtu"\nbaud = 12345'
 for role in hsi top; do
   "$fw" --config "$examples/$role.toml" --check-config >"$work/$role.out"; code=$?
   check "example $role.toml is valid" test "$code" -eq 0
@@ -62,8 +68,8 @@ for role in hsi top; do
   sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
   check "example $role.toml lists every key at its default" cmp -s "$work/defaults.$role" "$work/example.$role"
 done
-"$fw" --config "$examples/hsi.toml" --role top --check-config | grep -q '^role = "top"'
-check "--role overrides the file" test $? -eq 0
+"$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
+check "--role overrides the file" grep -q '^role = "top"' "$work/override"
 
 "$fw" --config "$examples/top.toml" --sim --fast --duration 2 --stats-json >"$work/stats" 2>"$work/err"; code=$?
 check "--sim exits 0" test "$code" -eq 0

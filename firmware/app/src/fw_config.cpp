@@ -30,6 +30,23 @@ linux_io::GpioEncoderConfig encoder_config(const BoardConfig& b) {
   return c;
 }
 
+linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
+  linux_io::ModbusGaugeConfig c;
+  if (b.gauge_transport == "rtu") {
+    c.transport = linux_io::ModbusRtuEndpoint{b.gauge_device, static_cast<int>(b.gauge_baud), b.gauge_parity, 8,
+                                              static_cast<int>(b.gauge_stop_bits), static_cast<int>(b.gauge_slave_id)};
+  } else {
+    c.transport = linux_io::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port),
+                                              static_cast<int>(b.gauge_unit_id)};
+  }
+  c.registers = b.gauge_registers;
+  c.registers.saturation_raw_min = b.gauge_saturation_raw_min;
+  c.registers.saturation_raw_max = b.gauge_saturation_raw_max;
+  c.poll_period = std::chrono::microseconds(b.gauge_poll_us);
+  c.response_timeout = std::chrono::microseconds(b.gauge_timeout_us);
+  return c;
+}
+
 ConfigSchema schema_for(FwConfig& config) {
   ConfigSchema s;
   auto& l = config.lever;
@@ -118,6 +135,42 @@ ConfigSchema schema_for(FwConfig& config) {
   s.boolean("board.encoder.active_low", b.encoder_active_low, "all encoder lines inverted");
   s.integer("board.encoder.edge_latency_us", b.encoder_edge_latency_us, 0, 100000, "us",
             "how long an edge may take to show in the kernel's event queue");
+
+  s.choice("board.gauge.transport", b.gauge_transport, {{"tcp", std::string("tcp")}, {"rtu", std::string("rtu")}},
+           "the amplifier's Modbus link");
+  s.text("board.gauge.host", b.gauge_host, "tcp: the amplifier's numeric IPv4 or IPv6 address");
+  s.integer("board.gauge.port", b.gauge_port, 1, 65535, "", "tcp: port");
+  s.integer("board.gauge.unit_id", b.gauge_unit_id, 0, 255, "", "tcp: unit id (255: the device itself)");
+  s.text("board.gauge.device", b.gauge_device, "rtu: serial device");
+  s.integer("board.gauge.baud", b.gauge_baud, 1200, 921600, "baud", "rtu: a standard rate");
+  s.choice("board.gauge.parity", b.gauge_parity,
+           {{"none", linux_io::Parity::none}, {"even", linux_io::Parity::even}, {"odd", linux_io::Parity::odd}},
+           "rtu: parity");
+  s.integer("board.gauge.stop_bits", b.gauge_stop_bits, 1, 2, "", "rtu: stop bits");
+  s.integer("board.gauge.slave_id", b.gauge_slave_id, 1, 247, "", "rtu: slave id");
+  auto& r = b.gauge_registers;
+  s.choice("board.gauge.function", r.function,
+           {{"holding", linux_io::RegisterFunction::holding}, {"input", linux_io::RegisterFunction::input}},
+           "register table (function code 3 or 4)");
+  s.integer("board.gauge.address", r.address, 0, 65535, "", "first register, 0-based (a manual's 40001 is 0)");
+  s.choice("board.gauge.type", r.type,
+           {{"int16", linux_io::RegisterType::int16},
+            {"uint16", linux_io::RegisterType::uint16},
+            {"int32", linux_io::RegisterType::int32},
+            {"uint32", linux_io::RegisterType::uint32},
+            {"float32", linux_io::RegisterType::float32}},
+           "register type");
+  s.choice("board.gauge.word_order", r.word_order,
+           {{"high_first", linux_io::WordOrder::high_first}, {"low_first", linux_io::WordOrder::low_first}},
+           "32-bit types: which word the lower address holds");
+  s.number("board.gauge.scale", r.scale, -1e12, 1e12, "N", "newtons per raw unit (not 0)");
+  s.number("board.gauge.offset", r.offset, -1e12, 1e12, "N", "added after scaling");
+  s.number("board.gauge.saturation_raw_min", b.gauge_saturation_raw_min, -1e15, 1e15, "raw",
+           "a raw value at or below is the amplifier's range end");
+  s.number("board.gauge.saturation_raw_max", b.gauge_saturation_raw_max, -1e15, 1e15, "raw",
+           "a raw value at or above is the amplifier's range end");
+  s.integer("board.gauge.poll_us", b.gauge_poll_us, 100, 10000000, "us", "poll period (RTU at 115200 baud: 5-10 ms)");
+  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us", "response timeout");
   return s;
 }
 
@@ -145,6 +198,7 @@ LoadedConfig load_fw_config(const std::string& path) {
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
+  if (const auto problem = linux_io::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
   if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
   return out;
 }
