@@ -5,13 +5,7 @@
 set -uo pipefail
 fw=$1
 examples=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0 failed=0
-check() {
-  local name=$1; shift
-  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
-}
+source "$(dirname "$0")/lib.sh"
 bad_config() {  # NAME EXPECTED_MESSAGE TOML
   local name=$1 expected=$2
   printf '%s\n' "$3" >"$work/bad.toml"
@@ -83,5 +77,4 @@ check "the simulated TOP homes and arms" jq -se 'map(.state) | index("armed") !=
 check "without --sim this version says what a board run lacks (exit 1)" test "$code" -eq 1
 check "and names it" grep -q "Modbus" "$work/err"
 
-echo "lever-fw cli: $passed passed, $failed failed"
-test "$failed" -eq 0
+report "lever-fw cli"
