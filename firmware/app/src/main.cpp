@@ -41,7 +41,7 @@ int run_sim(const app::FwConfig& config, double duration_s, bool stats_json, boo
     if (g_stop.load()) throw Stop{};
     if (!fast) std::this_thread::sleep_until(wall_start + std::chrono::milliseconds(v.tick));
     if (v.tick % 1000 != 0) return;
-    const auto line = hsi ? app::stats_line(v.hsi, v.tick, {}) : app::stats_line(v.top, v.tick, {});
+    const auto line = app::stats_json(hsi ? app::snapshot(v.hsi, v.tick) : app::snapshot(v.top, v.tick), {});
     if (stats_json) {
       fmt::print("{}\n", line.dump());
     } else {

@@ -1,14 +1,40 @@
 #pragma once
-// The once-a-second status line of lever-fw (`--stats-json`), one JSON object per line. docs/lever-fw.md
-// documents each field.
+// The once-a-second status line of lever-fw (`--stats-json`), one JSON object per line; docs/lever-fw.md
+// documents each field. The loop takes a Snapshot (plain numbers, trivially copyable, so it crosses to the
+// printing thread lock-free); the JSON is made outside the loop.
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "lever/fw/lever.hpp"
 
 namespace lever::app {
+
+struct Snapshot {
+  fw::Tick tick = 0;
+  protocol::Role role = protocol::Role::hsi;
+  std::uint8_t pair = 0;
+  protocol::LeverState state = protocol::LeverState::init;
+  protocol::FaultBits faults = 0;
+  double position_rad = 0.0;
+  bool position_valid = false;
+  double velocity_rad_s = 0.0;
+  bool has_force = false;
+  double force_n = 0.0;
+  bool has_force_age = false;
+  fw::Tick force_age_ms = 0;
+  bool has_remote = false;
+  double remote = 0.0;
+  double torque_nm = 0.0;
+  fw::LeverCounters counters{};
+  std::uint32_t overruns = 0;
+  fw::Tick worst_interval = 0;
+  std::uint64_t worst_step_ns = 0;
+  std::uint64_t encoder_edges = 0;
+  std::uint32_t encoder_illegal = 0, encoder_lost = 0;
+};
 
 // What only a board has (a simulated lever reports null for each).
 struct BoardStats {
@@ -17,51 +43,37 @@ struct BoardStats {
   std::optional<std::uint64_t> modbus_polls, modbus_errors, modbus_timeouts, modbus_reconnects;
 };
 
-std::string state_name(protocol::LeverState s);
-
 template <typename Lever>
-nlohmann::json stats_line(const Lever& lever, fw::Tick now, const BoardStats& board) {
+Snapshot snapshot(const Lever& lever, fw::Tick now) noexcept {
   const auto& t = lever.telemetry();
-  const auto& c = lever.counters();
-  nlohmann::json faults = nlohmann::json::array();
-  for (const auto f : protocol::kAllFaults)
-    if (protocol::has(lever.supervisor().latched(), f)) faults.push_back(std::string(protocol::name(f)));
   const auto& gauge = lever.gauge().state();
-  auto optional = [](const auto& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
-  return {
-      {"role", lever.config().role == protocol::Role::hsi ? "hsi" : "top"},
-      {"pair", lever.config().pair},
-      {"state", state_name(lever.supervisor().state())},
-      {"faults", faults},
-      {"position_rad", t.position_rad},
-      {"position_valid", t.position_valid},
-      {"velocity_rad_s", t.velocity_rad_s},
-      {"force_n", optional(t.force_n)},
-      {"force_age_ms", gauge.seen && now >= gauge.last_tick ? nlohmann::json(now - gauge.last_tick) : nlohmann::json()},
-      {"remote", optional(t.remote)},
-      {"torque_nm", t.torque_nm},
-      {"tx_frames", c.tx_frames},
-      {"rx_frames", c.rx_frames},
-      {"data_sent", c.data_sent},
-      {"refresh_sent", c.refresh_sent},
-      {"overruns", lever.timing().stats().overruns},
-      {"worst_step_interval_ms", lever.timing().stats().worst_interval},
-      {"worst_step_us", static_cast<double>(lever.timing().stats().worst_step_ns) * 1e-3},
-      {"wakeup_latency_us",
-       {{"p50", optional(board.wakeup_p50_us)},
-        {"p99", optional(board.wakeup_p99_us)},
-        {"max", optional(board.wakeup_max_us)}}},
-      {"encoder",
-       {{"edges", lever.decoder().edges()},
-        {"illegal", lever.decoder().illegal_transitions()},
-        {"lost", lever.decoder().lost_edges()}}},
-      {"modbus",
-       {{"polls", optional(board.modbus_polls)},
-        {"errors", optional(board.modbus_errors)},
-        {"timeouts", optional(board.modbus_timeouts)},
-        {"reconnects", optional(board.modbus_reconnects)}}},
-      {"minor_faults", optional(board.minor_faults)},
-  };
+  Snapshot s;
+  s.tick = now;
+  s.role = lever.config().role;
+  s.pair = lever.config().pair;
+  s.state = lever.supervisor().state();
+  s.faults = lever.supervisor().latched();
+  s.position_rad = t.position_rad;
+  s.position_valid = t.position_valid;
+  s.velocity_rad_s = t.velocity_rad_s;
+  s.has_force = t.force_n.has_value();
+  s.force_n = t.force_n.value_or(0.0);
+  s.has_force_age = gauge.seen && now >= gauge.last_tick;
+  s.force_age_ms = s.has_force_age ? now - gauge.last_tick : 0;
+  s.has_remote = t.remote.has_value();
+  s.remote = t.remote.value_or(0.0);
+  s.torque_nm = t.torque_nm;
+  s.counters = lever.counters();
+  s.overruns = lever.timing().stats().overruns;
+  s.worst_interval = lever.timing().stats().worst_interval;
+  s.worst_step_ns = lever.timing().stats().worst_step_ns;
+  s.encoder_edges = lever.decoder().edges();
+  s.encoder_illegal = lever.decoder().illegal_transitions();
+  s.encoder_lost = lever.decoder().lost_edges();
+  return s;
 }
+
+std::string state_name(protocol::LeverState s);
+nlohmann::json stats_json(const Snapshot& s, const BoardStats& board);
 
 }  // namespace lever::app
