@@ -3,14 +3,7 @@
 # usage: lever_codec_cli.sh path/to/lever-codec
 set -uo pipefail
 codec=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0 failed=0
-
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
-}
+source "$(dirname "$0")/lib.sh"
 
 # expect_bad NAME EXPECTED_STDERR_SUBSTRING ARGS...: exit 2, one stderr line, no output file left.
 expect_bad() {
@@ -64,5 +57,4 @@ check "generate writes a 3-DoF trace" test "$(head -1 "$work/f3.csv")" = "t,x,y,
 check "3-DoF output header" test "$(head -1 "$work/f3-out.csv")" = "t,sent,x_hat,y_hat,z_hat"
 check "3-DoF output has one row per sample" test "$(wc -l <"$work/f3-out.csv")" -eq 501
 
-echo "lever-codec cli: $passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+report "lever-codec cli"

@@ -3,13 +3,7 @@
 # usage: lever_hil_cli.sh path/to/lever-hil
 set -uo pipefail
 hil=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0 failed=0
-check() {
-  local name=$1; shift
-  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
-}
+source "$(dirname "$0")/lib.sh"
 expect_bad() {  # NAME EXPECTED_MESSAGE ARGS...
   local name=$1 expected=$2; shift 2
   "$hil" "$@" >"$work/out" 2>"$work/err"
@@ -53,5 +47,4 @@ for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png di
 done
 check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
 
-echo "lever-hil cli: $passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+report "lever-hil cli"

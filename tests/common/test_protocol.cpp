@@ -4,6 +4,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/protocol/messages.hpp"
+#include "random_messages.hpp"
 
 using namespace lever::protocol;
 
@@ -58,15 +59,7 @@ TEST_CASE("every message survives pack and decode for random contents", "[protoc
     CHECK((fback.force == f.force && fback.tick == f.tick && fback.seq == f.seq &&
            fback.flags.refresh == f.flags.refresh && fback.flags.restart == f.flags.restart));
 
-    HeartbeatMessage h;
-    h.state = static_cast<LeverState>(rng.next() % 5);
-    h.position_valid = (rng.next() & 1) != 0;
-    h.faults = static_cast<std::uint16_t>(rng.next());
-    h.last_data_seq = static_cast<std::uint8_t>(rng.next());
-    h.seq_gaps = static_cast<std::uint8_t>(rng.next());
-    h.rejected_frames = static_cast<std::uint8_t>(rng.next());
-    h.counter = static_cast<std::uint8_t>(rng.next());
-    h.encoder_errors = static_cast<std::uint8_t>(rng.next());
+    const HeartbeatMessage h = lever::test::random_heartbeat(rng);
     const Role role = (rng.next() & 1) ? Role::top : Role::hsi;
     HeartbeatMessage hback;
     REQUIRE(decode(pack(h, pair, role), hback, a) == DecodeError::none);

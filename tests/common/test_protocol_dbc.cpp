@@ -10,6 +10,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/protocol/messages.hpp"
+#include "random_messages.hpp"
 
 using namespace lever::protocol;
 
@@ -122,15 +123,7 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
                  {"Predictive", f.flags.mode == lever::codec::Mode::predictive},
                  {"Restart", f.flags.restart}});
 
-    HeartbeatMessage h;
-    h.state = static_cast<LeverState>(rng.next() % 5);
-    h.position_valid = flag();
-    h.faults = static_cast<std::uint16_t>(rng.next());
-    h.last_data_seq = static_cast<std::uint8_t>(rng.next());
-    h.seq_gaps = static_cast<std::uint8_t>(rng.next());
-    h.rejected_frames = static_cast<std::uint8_t>(rng.next());
-    h.counter = static_cast<std::uint8_t>(rng.next());
-    h.encoder_errors = static_cast<std::uint8_t>(rng.next());
+    const HeartbeatMessage h = lever::test::random_heartbeat(rng);
     const Expected heartbeat{{"State", static_cast<double>(h.state)},
                              {"PositionValid", h.position_valid},
                              {"Faults", h.faults},

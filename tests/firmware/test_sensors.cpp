@@ -234,3 +234,11 @@ TEST_CASE("tare averages fresh readings only and zeroes the force", "[firmware][
   REQUIRE(f);
   CHECK(*f == Approx(1.0));
 }
+
+TEST_CASE("a reading the source flags saturated is saturated whatever its value", "[firmware][gauge]") {
+  StrainGauge g({0.01, 0.0, -1000, 1000, 5, 4});
+  g.update(ForceReading{10, 1, false, true}, 1);
+  CHECK(g.state().saturated);
+  g.update(ForceReading{10, 2, false, false}, 2);
+  CHECK_FALSE(g.state().saturated);
+}

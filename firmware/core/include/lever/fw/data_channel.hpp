@@ -14,6 +14,19 @@ namespace lever::fw {
 template <typename WireInt>
 using WireQuantizer = codec::FixedPointQuantizer<double, WireInt>;
 
+// The message set's fixed-point fields (protocol/messages.hpp), as the codec's quantizers.
+constexpr WireQuantizer<std::int16_t> velocity_wire() noexcept { return {protocol::kVelocityLsb}; }
+constexpr WireQuantizer<std::int32_t> force_wire() noexcept {
+  return {protocol::kForceLsb, protocol::kForceCodeMin, protocol::kForceCodeMax};
+}
+constexpr WireQuantizer<std::int16_t> position_wire() noexcept { return {protocol::kPositionLsbRad}; }
+
+// A data frame a role hands to the lever to send, and whether it is a refresh (counted apart).
+struct OutgoingData {
+  protocol::CanFrame frame;
+  bool refresh = false;
+};
+
 // The codec runs in tick units: integer-valued doubles make every time difference exact, so the predictor's
 // slope and extrapolation come out bit-identical at both ends even though the receiver only knows the
 // sender's tick modulo 2^16 (an unknown base cancels out exactly). The prefilter's cut-off follows the unit.

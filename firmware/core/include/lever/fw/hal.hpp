@@ -58,8 +58,9 @@ concept EncoderPort = EdgeEncoderPort<E> || CountingEncoderPort<E>;
 // register map scales to); the core's gauge calibration turns it into newtons.
 struct ForceReading {
   double raw = 0.0;
-  Tick tick = 0;       // when it was taken, on the firmware's clock
-  bool error = false;  // the transport (Modbus) or the amplifier reported a failed reading
+  Tick tick = 0;           // when it was taken, on the firmware's clock
+  bool error = false;      // the transport (Modbus) or the amplifier reported a failed reading
+  bool saturated = false;  // the source says its input is at its range end (an amplifier's overload code)
 };
 
 // The newest amplifier reading, with its timestamp; empty before the first.

@@ -26,8 +26,8 @@ class HsiRole {
 
   explicit constexpr HsiRole(const LeverConfig& c) noexcept
       : display_(c.display),
-        sender_(c.motion_codec, velocity_quantizer(), c.refresh_period),
-        receiver_(force_quantizer()),
+        sender_(c.motion_codec, velocity_wire(), c.refresh_period),
+        receiver_(force_wire()),
         stale_after_(2 * c.refresh_period) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_hsi; }
@@ -63,33 +63,23 @@ class HsiRole {
     return display_.update(t.remote.value_or(0.0), own, t.velocity_rad_s, dt);
   }
 
-  struct Outgoing {
-    protocol::CanFrame frame;
-    bool refresh = false;
-  };
-  std::optional<Outgoing> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
+  std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
     const auto out = sender_.offer(now, t.velocity_rad_s);
     if (!out.send) return std::nullopt;
     bool position_saturated = false;
     protocol::MotionMessage m;
-    m.position = position_quantizer().encode(t.position_rad, position_saturated);
+    m.position = position_wire().encode(t.position_rad, position_saturated);
     m.velocity = out.code;
     m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
     m.seq = out.seq;
     m.flags = {position_saturated, out.saturated, out.refresh, out.mode, out.restart};
-    return Outgoing{protocol::pack(m, pair), out.refresh};
+    return OutgoingData{protocol::pack(m, pair), out.refresh};
   }
 
   // set_deadband for the motion direction, which the HSI sends.
   constexpr void reconfigure(const codec::Config<double>& c) noexcept { sender_.reconfigure(c); }
 
  private:
-  static constexpr WireQuantizer<std::int16_t> velocity_quantizer() noexcept { return {protocol::kVelocityLsb}; }
-  static constexpr WireQuantizer<std::int32_t> force_quantizer() noexcept {
-    return {protocol::kForceLsb, protocol::kForceCodeMin, protocol::kForceCodeMax};
-  }
-  static constexpr WireQuantizer<std::int16_t> position_quantizer() noexcept { return {protocol::kPositionLsbRad}; }
-
   ForceDisplay display_;
   Sender sender_;
   Receiver receiver_;

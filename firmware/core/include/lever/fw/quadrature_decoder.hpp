@@ -26,6 +26,7 @@ class QuadratureDecoder {
   // One observed level change. Gray-code order 00 -> 01 -> 11 -> 10 -> 00 counts up.
   constexpr void feed(AbState levels) noexcept {
     levels &= 3u;
+    ++edges_;
     if (!primed_) {
       reset(levels);
       return;
@@ -53,6 +54,7 @@ class QuadratureDecoder {
   }
 
   constexpr std::int32_t counts() const noexcept { return counts_; }
+  constexpr std::uint64_t edges() const noexcept { return edges_; }  // fed since power-up
   constexpr std::uint32_t illegal_transitions() const noexcept { return illegal_; }
   constexpr std::uint32_t lost_edges() const noexcept { return lost_; }
   constexpr bool fault() const noexcept { return illegal_ > config_.illegal_threshold || lost_ > 0; }
@@ -86,6 +88,7 @@ class QuadratureDecoder {
   std::int32_t counts_ = 0;
   std::uint32_t illegal_ = 0;
   std::uint32_t lost_ = 0;
+  std::uint64_t edges_ = 0;
   std::optional<std::int32_t> index_counts_;
 };
 

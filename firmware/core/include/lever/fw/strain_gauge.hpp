@@ -44,7 +44,7 @@ class StrainGauge {
       const bool fresh = !state_.seen || reading->tick != state_.last_tick;
       state_.seen = true;
       state_.last_tick = reading->tick;
-      state_.saturated = reading->raw <= config_.raw_min || reading->raw >= config_.raw_max;
+      state_.saturated = reading->saturated || reading->raw <= config_.raw_min || reading->raw >= config_.raw_max;
       if (fresh && state_.tare_left > 0) accumulate_tare(reading->raw);
       state_.value_counts = reading->raw;
     }

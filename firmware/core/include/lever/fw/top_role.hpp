@@ -26,8 +26,8 @@ class TopRole {
 
   explicit constexpr TopRole(const LeverConfig& c) noexcept
       : controller_(c.position),
-        sender_(c.force_codec, force_quantizer(), c.refresh_period),
-        receiver_(velocity_quantizer()),
+        sender_(c.force_codec, force_wire(), c.refresh_period),
+        receiver_(velocity_wire()),
         stale_after_(2 * c.refresh_period),
         approach_speed_(c.position.approach_speed_rad_s) {}
 
@@ -48,7 +48,7 @@ class TopRole {
     const auto error = protocol::decode(frame, m, address);
     used = error == protocol::DecodeError::none && receiver_.accept(now, m.tick, m.seq, m.flags, m.velocity);
     if (used) {
-      position_ref_ = position_quantizer().decode(m.position);
+      position_ref_ = position_wire().decode(m.position);
       have_motion_ = true;
     }
     return error;
@@ -91,11 +91,7 @@ class TopRole {
     return controller_.update(tracked_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
   }
 
-  struct Outgoing {
-    protocol::CanFrame frame;
-    bool refresh = false;
-  };
-  std::optional<Outgoing> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
+  std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
     if (!t.force_n) return std::nullopt;  // stale gauge: the supervisor is already taking the lever down
     const auto out = sender_.offer(now, *t.force_n);
     if (!out.send) return std::nullopt;
@@ -104,19 +100,13 @@ class TopRole {
     m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
     m.seq = out.seq;
     m.flags = {out.saturated, false, out.refresh, out.mode, out.restart};
-    return Outgoing{protocol::pack(m, pair), out.refresh};
+    return OutgoingData{protocol::pack(m, pair), out.refresh};
   }
 
   // set_deadband for the force direction, which the TOP sends.
   constexpr void reconfigure(const codec::Config<double>& c) noexcept { sender_.reconfigure(c); }
 
  private:
-  static constexpr WireQuantizer<std::int16_t> velocity_quantizer() noexcept { return {protocol::kVelocityLsb}; }
-  static constexpr WireQuantizer<std::int32_t> force_quantizer() noexcept {
-    return {protocol::kForceLsb, protocol::kForceCodeMin, protocol::kForceCodeMax};
-  }
-  static constexpr WireQuantizer<std::int16_t> position_quantizer() noexcept { return {protocol::kPositionLsbRad}; }
-
   PositionController controller_;
   Sender sender_;
   Receiver receiver_;

@@ -1,0 +1,91 @@
+#pragma once
+// One list of fields per configuration serves loading, validation, printing and the docs (as moteus's
+// Serialize does): a TOML file and `--check-config` cannot drift apart. Each field knows its dotted key, its
+// unit, its range and a line of documentation; loading reports the file, the key and the problem.
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#ifndef TOML_EXCEPTIONS
+#define TOML_EXCEPTIONS 1
+#endif
+#include <toml++/toml.h>
+
+namespace lever::app {
+
+class ConfigSchema {
+ public:
+  // A choice's names and values, e.g. {{"hsi", Role::hsi}, {"top", Role::top}}.
+  template <typename E>
+  using Choices = std::vector<std::pair<std::string, E>>;
+
+  void number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc);
+  // Whole numbers: a TOML integer, or a float with no fractional part, in [lo, hi].
+  template <typename Int>
+  void integer(std::string key, Int& value, std::int64_t lo, std::int64_t hi, std::string unit, std::string doc) {
+    add({std::move(key), std::move(unit), std::move(doc),
+         [&value, lo, hi](const toml::node& n) -> std::optional<std::string> {
+           std::int64_t v = 0;
+           if (auto e = read_integer(n, lo, hi, v)) return e;
+           value = static_cast<Int>(v);
+           return std::nullopt;
+         },
+         [&value] { return std::to_string(static_cast<std::int64_t>(value)); }});
+  }
+  void boolean(std::string key, bool& value, std::string doc);
+  void text(std::string key, std::string& value, std::string doc);
+  template <typename E>
+  void choice(std::string key, E& value, Choices<E> choices, std::string doc) {
+    std::string names;
+    for (const auto& [name, v] : choices) names += (names.empty() ? "" : ", ") + name;
+    add({std::move(key), "", std::move(doc) + " (" + names + ")",
+         [&value, choices, names](const toml::node& n) -> std::optional<std::string> {
+           std::string s;
+           if (auto e = read_text(n, s)) return e;
+           for (const auto& [name, v] : choices)
+             if (name == s) {
+               value = v;
+               return std::nullopt;
+             }
+           return "must be one of " + names + ", got '" + printable(s) + "'";
+         },
+         [&value, choices] {
+           for (const auto& [name, v] : choices)
+             if (v == value) return "\"" + name + "\"";
+           return std::string("\"?\"");
+         }});
+  }
+
+  // Loads a TOML file over the current values. Returns "FILE: KEY: problem" (or "FILE:LINE: problem" for a
+  // syntax error) on the first problem: unknown keys, wrong types, values out of range, NaN. Keys before the
+  // problem may already be set: load into a scratch configuration and keep it only on success.
+  std::optional<std::string> load_file(const std::string& path);
+  std::optional<std::string> load_string(std::string_view text, const std::string& source_name);
+
+  // The effective configuration as a TOML document, every key with its unit and documentation.
+  std::string print() const;
+
+  std::size_t size() const { return fields_.size(); }
+
+ private:
+  struct Field {
+    std::string key, unit, doc;
+    std::function<std::optional<std::string>(const toml::node&)> load;
+    std::function<std::string()> print;
+  };
+  void add(Field f);
+  static std::optional<std::string> read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
+                                                 std::int64_t& out);
+  static std::optional<std::string> read_text(const toml::node& n, std::string& out);
+  static std::string printable(std::string_view s);
+
+  std::vector<Field> fields_;
+  std::map<std::string, std::size_t, std::less<>> index_;
+};
+
+}  // namespace lever::app

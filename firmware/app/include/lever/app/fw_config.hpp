@@ -1,0 +1,57 @@
+#pragma once
+// Everything lever-fw is configured with: the firmware core's LeverConfig and the board's backends, as one
+// TOML file whose keys carry their units (docs/lever-fw.md lists them with defaults).
+#include <string>
+
+#include "lever/app/config_schema.hpp"
+#include "lever/fw/lever_config.hpp"
+#include "lever/linux/gpio_encoder_config.hpp"
+#include "lever/linux/modbus_gauge_config.hpp"
+
+namespace lever::app {
+
+struct BoardConfig {
+  std::string can_interface = "can0";
+  // The encoder's lines, by name or by offset on the chip ("ENC_A", "17"); an empty index line: none.
+  std::string encoder_chip = "gpiochip0";
+  std::string encoder_line_a = "ENC_A", encoder_line_b = "ENC_B", encoder_line_z;
+  bool encoder_active_low = false;
+  std::int64_t encoder_edge_latency_us = 50;
+
+  // The strain gauge's weighing amplifier over Modbus. It reports newtons (raw * scale + offset), so with it
+  // the core's gauge.newton_per_unit stays 1.
+  std::string gauge_transport = "tcp";  // tcp or rtu
+  std::string gauge_host = "127.0.0.1";
+  std::int64_t gauge_port = 502, gauge_unit_id = 255;
+  std::string gauge_device = "/dev/ttyUSB0";
+  std::int64_t gauge_baud = 115200, gauge_stop_bits = 1, gauge_slave_id = 1;
+  linux_io::Parity gauge_parity = linux_io::Parity::none;
+  // Default: the common layout of a weighing amplifier, the gross weight as a 32-bit integer in holding
+  // registers 0-1, high word first, in grams (linux_io::preset_gross_weight_int32).
+  linux_io::GaugeRegisterMap gauge_registers{linux_io::RegisterFunction::holding, 0, linux_io::RegisterType::int32,
+                                             linux_io::WordOrder::high_first, 9.80665e-3, 0.0};
+  double gauge_saturation_raw_min = -1e15, gauge_saturation_raw_max = 1e15;
+  std::int64_t gauge_poll_us = 5000, gauge_timeout_us = 20000;
+};
+
+// The libgpiod backend's configuration from the board's keys.
+linux_io::GpioEncoderConfig encoder_config(const BoardConfig& board);
+// The Modbus backend's configuration from the board's keys.
+linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& board);
+
+struct FwConfig {
+  fw::LeverConfig lever{};
+  BoardConfig board{};
+};
+
+// The schema of a FwConfig: every key, bound to `config`'s fields.
+ConfigSchema schema_for(FwConfig& config);
+
+// Loads `path` over the defaults. On failure: the message naming file, key and problem.
+struct LoadedConfig {
+  FwConfig config;
+  std::string error;  // empty on success
+};
+LoadedConfig load_fw_config(const std::string& path);
+
+}  // namespace lever::app

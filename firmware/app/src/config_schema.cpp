@@ -1,0 +1,187 @@
+#include "lever/app/config_schema.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace lever::app {
+namespace {
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::table:
+      return "a table";
+    default:
+      return "a date or time";
+  }
+}
+
+std::string number_text(double v) {
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // stays a TOML float
+  return s;
+}
+
+// Dotted keys of every leaf value in a table (arrays count as leaves).
+void collect_keys(const toml::table& t, const std::string& prefix, std::vector<std::string>& out) {
+  for (const auto& [k, v] : t) {
+    const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (const auto* sub = v.as_table()) {
+      collect_keys(*sub, key, out);
+    } else {
+      out.push_back(key);
+    }
+  }
+}
+
+}  // namespace
+
+void ConfigSchema::add(Field f) {
+  index_.emplace(f.key, fields_.size());
+  fields_.push_back(std::move(f));
+}
+
+std::string ConfigSchema::printable(std::string_view s) {
+  // A config value echoed into a one-line message: control bytes escaped, and never a whole file of it.
+  std::string out;
+  for (const char c : s.substr(0, 80)) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      out += fmt::format("\\x{:02x}", static_cast<unsigned char>(c));
+    } else {
+      out += c;
+    }
+  }
+  if (s.size() > 80) out += "...";
+  return out;
+}
+
+std::optional<std::string> ConfigSchema::read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
+                                                      std::int64_t& out) {
+  const auto range = fmt::format("a whole number in [{}, {}]", lo, hi);
+  if (const auto* i = n.as_integer()) {
+    out = i->get();
+  } else if (const auto* f = n.as_floating_point()) {
+    const double v = f->get();
+    if (!std::isfinite(v) || v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi))
+      return fmt::format("must be {}, got {}", range, v);
+    out = static_cast<std::int64_t>(v);
+  } else {
+    return "must be " + range + ", got " + type_name(n);
+  }
+  if (out < lo || out > hi) return fmt::format("must be {}, got {}", range, out);
+  return std::nullopt;
+}
+
+std::optional<std::string> ConfigSchema::read_text(const toml::node& n, std::string& out) {
+  const auto* s = n.as_string();
+  if (!s) return "must be a string, got " + type_name(n);
+  out = s->get();
+  return std::nullopt;
+}
+
+void ConfigSchema::number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc) {
+  add({std::move(key), unit, std::move(doc),
+       [&value, lo, hi, unit](const toml::node& n) -> std::optional<std::string> {
+         double v = 0.0;
+         if (const auto* f = n.as_floating_point()) {
+           v = f->get();
+         } else if (const auto* i = n.as_integer()) {
+           v = static_cast<double>(i->get());
+         } else {
+           return "must be a number, got " + type_name(n);
+         }
+         const auto range =
+             fmt::format("a number in [{}, {}]{}", number_text(lo), number_text(hi), unit.empty() ? "" : " " + unit);
+         if (!std::isfinite(v)) return fmt::format("must be {}, got {}", range, v);
+         if (v < lo || v > hi) return fmt::format("must be {}, got {}", range, number_text(v));
+         value = v;
+         return std::nullopt;
+       },
+       [&value] { return number_text(value); }});
+}
+
+void ConfigSchema::boolean(std::string key, bool& value, std::string doc) {
+  add({std::move(key), "", std::move(doc),
+       [&value](const toml::node& n) -> std::optional<std::string> {
+         const auto* b = n.as_boolean();
+         if (!b) return "must be true or false, got " + type_name(n);
+         value = b->get();
+         return std::nullopt;
+       },
+       [&value] { return std::string(value ? "true" : "false"); }});
+}
+
+void ConfigSchema::text(std::string key, std::string& value, std::string doc) {
+  add({std::move(key), "", std::move(doc),
+       [&value](const toml::node& n) -> std::optional<std::string> {
+         std::string s;
+         if (auto e = read_text(n, s)) return e;
+         if (s.find('\0') != std::string::npos) return "must not contain a NUL byte";
+         value = s;
+         return std::nullopt;
+       },
+       [&value] {
+         std::ostringstream out;
+         out << toml::value<std::string>(value);
+         return out.str();
+       }});
+}
+
+std::optional<std::string> ConfigSchema::load_string(std::string_view text, const std::string& source_name) {
+  toml::table t;
+  try {
+    t = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    return fmt::format("{}:{}: {}", source_name, e.source().begin.line, e.description());
+  }
+  std::vector<std::string> keys;
+  collect_keys(t, "", keys);
+  for (const auto& key : keys)
+    if (index_.find(key) == index_.end()) return fmt::format("{}: {}: unknown key", source_name, printable(key));
+  for (const auto& f : fields_) {
+    const auto node = t.at_path(f.key);
+    if (!node) continue;
+    if (auto e = f.load(*node.node())) return fmt::format("{}: {}: {}", source_name, f.key, *e);
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> ConfigSchema::load_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fmt::format("{}: cannot read: {}", path, std::strerror(errno));
+  std::ostringstream content;
+  content << in.rdbuf();
+  return load_string(content.str(), path);
+}
+
+std::string ConfigSchema::print() const {
+  std::string out;
+  std::string section;
+  for (const auto& f : fields_) {
+    const auto dot = f.key.rfind('.');
+    const std::string table = dot == std::string::npos ? "" : f.key.substr(0, dot);
+    const std::string name = dot == std::string::npos ? f.key : f.key.substr(dot + 1);
+    if (table != section) {
+      out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", table);
+      section = table;
+    }
+    out += fmt::format("{} = {}  # {}{}\n", name, f.print(), f.unit.empty() ? "" : f.unit + ": ", f.doc);
+  }
+  return out;
+}
+
+}  // namespace lever::app

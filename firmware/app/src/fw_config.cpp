@@ -1,0 +1,206 @@
+#include "lever/app/fw_config.hpp"
+
+#include <fmt/format.h>
+
+namespace lever::app {
+namespace {
+
+using codec::Mode;
+using fw::Tick;
+
+const ConfigSchema::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+
+void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<double>& c, const std::string& unit) {
+  s.choice(section + ".mode", c.mode, kModes, "reference: last value sent (deadband) or the linear predictor");
+  s.number(section + ".p", c.p, 0.0, 6.5535, "", "Weber fraction: a sample is sent when it differs by more than p");
+  s.number(section + ".floor", c.floor, 0.0, 65.535, unit, "absolute deadband floor (0: the paper's rule)");
+  s.number(section + ".filter_hz", c.filter_hz, 0.0, 500.0, "Hz", "prefilter cut-off, below Nyquist (0: off)");
+}
+
+}  // namespace
+
+linux_io::GpioEncoderConfig encoder_config(const BoardConfig& b) {
+  linux_io::GpioEncoderConfig c;
+  c.chip = b.encoder_chip;
+  c.line_a = linux_io::LineRef::parse(b.encoder_line_a);
+  c.line_b = linux_io::LineRef::parse(b.encoder_line_b);
+  if (!b.encoder_line_z.empty()) c.line_z = linux_io::LineRef::parse(b.encoder_line_z);
+  c.active_low = b.encoder_active_low;
+  c.edge_latency_us = static_cast<std::uint32_t>(b.encoder_edge_latency_us);
+  return c;
+}
+
+linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
+  linux_io::ModbusGaugeConfig c;
+  if (b.gauge_transport == "rtu") {
+    c.transport = linux_io::ModbusRtuEndpoint{b.gauge_device, static_cast<int>(b.gauge_baud), b.gauge_parity, 8,
+                                              static_cast<int>(b.gauge_stop_bits), static_cast<int>(b.gauge_slave_id)};
+  } else {
+    c.transport = linux_io::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port),
+                                              static_cast<int>(b.gauge_unit_id)};
+  }
+  c.registers = b.gauge_registers;
+  c.registers.saturation_raw_min = b.gauge_saturation_raw_min;
+  c.registers.saturation_raw_max = b.gauge_saturation_raw_max;
+  c.poll_period = std::chrono::microseconds(b.gauge_poll_us);
+  c.response_timeout = std::chrono::microseconds(b.gauge_timeout_us);
+  return c;
+}
+
+ConfigSchema schema_for(FwConfig& config) {
+  ConfigSchema s;
+  auto& l = config.lever;
+  s.choice("lever.role", l.role, {{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}},
+           "HSI: the operator's lever; TOP: the lever at the wall");
+  s.integer("lever.pair", l.pair, 0, protocol::kPairCount - 1, "", "lever pair, selects the CAN ids");
+
+  s.integer("link.heartbeat_ms", l.heartbeat_period, 1, 1000, "ms", "heartbeat period");
+  s.integer("link.comms_timeout_ms", l.comms_timeout, 1, 60000, "ms", "peer silent this long latches COMMS");
+  s.integer("link.refresh_ms", l.refresh_period, 1, 30000, "ms", "a data frame at least this often");
+
+  bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
+  bind_codec(s, "codec.force", l.force_codec, "N");
+
+  s.number("encoder.counts_per_rev", l.counts_per_rev, 1.0, 1e8, "counts", "counts per turn (lines x4)");
+  s.integer("encoder.counter_bits", l.counter_bits, 8, 32, "bits", "width of a hardware counter");
+  s.integer("encoder.illegal_threshold", l.decoder.illegal_threshold, 0, 1000000, "",
+            "illegal transitions tolerated before ENCODER latches");
+  s.choice("velocity.method", l.velocity.method,
+           {{"tracking_loop", fw::VelocityMethod::tracking_loop},
+            {"backward_difference", fw::VelocityMethod::backward_difference}},
+           "velocity estimate");
+  s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0, 2000.0, "rad/s", "tracking loop bandwidth");
+
+  s.number("gauge.newton_per_unit", l.gauge.newton_per_count, 1e-12, 1e6, "N",
+           "newtons per amplifier unit (ADC count, or 1 when the amplifier reports newtons)");
+  s.number("gauge.offset", l.gauge.offset_counts, -1e12, 1e12, "units", "zero-force reading, replaced by a tare");
+  s.number("gauge.raw_min", l.gauge.raw_min, -1e12, 1e12, "units", "readings at or below are saturated");
+  s.number("gauge.raw_max", l.gauge.raw_max, -1e12, 1e12, "units", "readings at or above are saturated");
+  s.integer("gauge.stale_ms", l.gauge.stale_after, 1, 10000, "ms", "an older reading gives no force at all");
+  s.integer("gauge.tare_samples", l.gauge.tare_samples, 1, 10000, "", "fresh readings averaged by a tare");
+  s.boolean("gauge.used", l.use_force_sensor, "the lever reads its gauge (TOP: always; HSI: closed-loop display)");
+
+  auto& h = l.homing;
+  s.choice("homing.method", h.method,
+           {{"absolute", fw::HomingMethod::absolute},
+            {"hard_stop", fw::HomingMethod::hard_stop},
+            {"index", fw::HomingMethod::index}},
+           "absolute encoder, or home against the end stop, or at the index line");
+  s.number("homing.direction", h.direction, -1.0, 1.0, "", "-1 or +1: where the stop or index is");
+  s.number("homing.speed_rad_s", h.speed_rad_s, 1e-3, 10.0, "rad/s", "homing speed");
+  s.number("homing.kp_nms", h.kp_nms, 0.0, 10.0, "N m s/rad", "homing velocity loop, proportional");
+  s.number("homing.ki_nm", h.ki_nm, 0.0, 100.0, "N m/rad", "homing velocity loop, integral");
+  s.number("homing.torque_limit_nm", h.torque_limit_nm, 1e-3, 10.0, "N m", "never more while homing");
+  s.number("homing.stall_speed_rad_s", h.stall_speed_rad_s, 1e-4, 10.0, "rad/s",
+           "slower than this at the torque limit...");
+  s.integer("homing.stall_ms", h.stall_ticks, 1, 10000, "ms", "...this long is the stop");
+  s.number("homing.home_position_rad", h.home_position_rad, -100.0, 100.0, "rad", "position of the stop or index");
+  s.number("homing.max_travel_rad", h.max_travel_rad, 1e-3, 100.0, "rad", "give up after this much travel");
+  s.integer("homing.timeout_ms", h.timeout_ticks, 1, 600000, "ms", "give up after this long");
+
+  s.number("timing.overrun_periods", l.timing.overrun_periods, 1.0, 100.0, "periods",
+           "a longer step interval is an overrun");
+  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms", "a longer step interval latches TIMING");
+
+  s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
+  s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");
+  s.number("control.position.kff_nms", l.position.kff_velocity, 0.0, 100.0, "N m s/rad", "velocity feed-forward");
+  s.number("control.position.approach_speed_rad_s", l.position.approach_speed_rad_s, 1e-3, 100.0, "rad/s",
+           "after arming, the TOP walks to the HSI at most this fast");
+  s.number("control.display.lever_arm_m", l.display.lever_arm_m, 1e-3, 10.0, "m", "pivot to handle");
+  s.number("control.display.gain", l.display.gain, 0.0, 100.0, "", "force scaling TOP to HSI");
+  s.boolean("control.display.closed_loop", l.display.closed_loop, "PI on the HSI's own gauge");
+  s.number("control.display.kp", l.display.kp, 0.0, 100.0, "", "closed loop: per unit force error");
+  s.number("control.display.ki_per_s", l.display.ki, 0.0, 10000.0, "1/s", "closed loop: integral gain");
+  s.number("control.display.integral_limit_n", l.display.integral_limit_n, 0.0, 1000.0, "N", "integral clamp");
+  s.number("control.display.contact_damping_nms", l.display.contact_damping_nms, 0.0, 100.0, "N m s/rad",
+           "HSI damping while a contact force is displayed");
+  s.number("control.display.contact_threshold_n", l.display.contact_threshold_n, 0.0, 100.0, "N",
+           "displayed force above which the lever is in contact");
+
+  s.number("safety.torque_limit_nm", l.torque_limit_nm, 1e-3, 100.0, "N m", "never exceeded");
+  s.integer("safety.torque_saturation_ms", l.torque_saturation_ticks, 1, 60000, "ms",
+            "demand above the limit this long latches TORQUE_LIMIT");
+  s.number("safety.position_min_rad", l.position_min_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
+  s.number("safety.position_max_rad", l.position_max_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
+  s.number("safety.safe_hold_torque_nm", l.safe_hold_torque_nm, 0.0, 100.0, "N m", "TOP hold after a fault...");
+  s.integer("safety.safe_hold_ms", l.safe_hold_ticks, 0, 60000, "ms", "...for this long, then zero torque");
+
+  auto& b = config.board;
+  s.text("board.can.interface", b.can_interface, "SocketCAN interface");
+  s.text("board.encoder.chip", b.encoder_chip, "GPIO chip: path, name or label");
+  s.text("board.encoder.line_a", b.encoder_line_a, "line A by name or offset");
+  s.text("board.encoder.line_b", b.encoder_line_b, "line B by name or offset");
+  s.text("board.encoder.line_z", b.encoder_line_z, "index line by name or offset; empty: none");
+  s.boolean("board.encoder.active_low", b.encoder_active_low, "all encoder lines inverted");
+  s.integer("board.encoder.edge_latency_us", b.encoder_edge_latency_us, 0, 100000, "us",
+            "how long an edge may take to show in the kernel's event queue");
+
+  s.choice("board.gauge.transport", b.gauge_transport, {{"tcp", std::string("tcp")}, {"rtu", std::string("rtu")}},
+           "the amplifier's Modbus link");
+  s.text("board.gauge.host", b.gauge_host, "tcp: the amplifier's numeric IPv4 or IPv6 address");
+  s.integer("board.gauge.port", b.gauge_port, 1, 65535, "", "tcp: port");
+  s.integer("board.gauge.unit_id", b.gauge_unit_id, 0, 255, "", "tcp: unit id (255: the device itself)");
+  s.text("board.gauge.device", b.gauge_device, "rtu: serial device");
+  s.integer("board.gauge.baud", b.gauge_baud, 1200, 921600, "baud", "rtu: a standard rate");
+  s.choice("board.gauge.parity", b.gauge_parity,
+           {{"none", linux_io::Parity::none}, {"even", linux_io::Parity::even}, {"odd", linux_io::Parity::odd}},
+           "rtu: parity");
+  s.integer("board.gauge.stop_bits", b.gauge_stop_bits, 1, 2, "", "rtu: stop bits");
+  s.integer("board.gauge.slave_id", b.gauge_slave_id, 1, 247, "", "rtu: slave id");
+  auto& r = b.gauge_registers;
+  s.choice("board.gauge.function", r.function,
+           {{"holding", linux_io::RegisterFunction::holding}, {"input", linux_io::RegisterFunction::input}},
+           "register table (function code 3 or 4)");
+  s.integer("board.gauge.address", r.address, 0, 65535, "", "first register, 0-based (a manual's 40001 is 0)");
+  s.choice("board.gauge.type", r.type,
+           {{"int16", linux_io::RegisterType::int16},
+            {"uint16", linux_io::RegisterType::uint16},
+            {"int32", linux_io::RegisterType::int32},
+            {"uint32", linux_io::RegisterType::uint32},
+            {"float32", linux_io::RegisterType::float32}},
+           "register type");
+  s.choice("board.gauge.word_order", r.word_order,
+           {{"high_first", linux_io::WordOrder::high_first}, {"low_first", linux_io::WordOrder::low_first}},
+           "32-bit types: which word the lower address holds");
+  s.number("board.gauge.scale", r.scale, -1e12, 1e12, "N", "newtons per raw unit (not 0)");
+  s.number("board.gauge.offset", r.offset, -1e12, 1e12, "N", "added after scaling");
+  s.number("board.gauge.saturation_raw_min", b.gauge_saturation_raw_min, -1e15, 1e15, "raw",
+           "a raw value at or below is the amplifier's range end");
+  s.number("board.gauge.saturation_raw_max", b.gauge_saturation_raw_max, -1e15, 1e15, "raw",
+           "a raw value at or above is the amplifier's range end");
+  s.integer("board.gauge.poll_us", b.gauge_poll_us, 100, 10000000, "us", "poll period (RTU at 115200 baud: 5-10 ms)");
+  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us", "response timeout");
+  return s;
+}
+
+LoadedConfig load_fw_config(const std::string& path) {
+  LoadedConfig out;
+  auto schema = schema_for(out.config);
+  if (auto e = schema.load_file(path)) {
+    out.error = *e;
+    return out;
+  }
+  // What one key cannot say alone.
+  const auto& l = out.config.lever;
+  auto fail = [&](std::string_view keys, std::string_view problem) {
+    out.error = fmt::format("{}: {}: {}", path, keys, problem);
+    return out;
+  };
+  if (!(l.position_min_rad < l.position_max_rad))
+    return fail("safety.position_min_rad, safety.position_max_rad", "the minimum must be below the maximum");
+  if (l.safe_hold_torque_nm > l.torque_limit_nm)
+    return fail("safety.safe_hold_torque_nm", "must not exceed safety.torque_limit_nm");
+  if (l.homing.torque_limit_nm > l.torque_limit_nm)
+    return fail("homing.torque_limit_nm", "must not exceed safety.torque_limit_nm");
+  if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
+  if (!(l.gauge.raw_min < l.gauge.raw_max))
+    return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
+  const auto problems = encoder_config(out.config.board).validate();
+  if (!problems.empty()) return fail("board.encoder", problems.front());
+  if (const auto problem = linux_io::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
+  if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
+  return out;
+}
+
+}  // namespace lever::app

@@ -1,0 +1,55 @@
+#include "lever/app/stats_line.hpp"
+
+namespace lever::app {
+
+std::string state_name(protocol::LeverState s) {
+  switch (s) {
+    case protocol::LeverState::init: return "init";
+    case protocol::LeverState::disarmed: return "disarmed";
+    case protocol::LeverState::armed: return "armed";
+    case protocol::LeverState::fault: return "fault";
+    case protocol::LeverState::homing: return "homing";
+  }
+  return "unknown";
+}
+
+nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
+  auto optional = [](const auto& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+  auto if_set = [](bool set, const auto& v) { return set ? nlohmann::json(v) : nlohmann::json(); };
+  nlohmann::json faults = nlohmann::json::array();
+  for (const auto f : protocol::kAllFaults)
+    if (protocol::has(s.faults, f)) faults.push_back(std::string(protocol::name(f)));
+  return {
+      {"role", s.role == protocol::Role::hsi ? "hsi" : "top"},
+      {"pair", s.pair},
+      {"state", state_name(s.state)},
+      {"faults", faults},
+      {"position_rad", s.position_rad},
+      {"position_valid", s.position_valid},
+      {"velocity_rad_s", s.velocity_rad_s},
+      {"force_n", if_set(s.has_force, s.force_n)},
+      {"force_age_ms", if_set(s.has_force_age, s.force_age_ms)},
+      {"remote", if_set(s.has_remote, s.remote)},
+      {"torque_nm", s.torque_nm},
+      {"tx_frames", s.counters.tx_frames},
+      {"rx_frames", s.counters.rx_frames},
+      {"data_sent", s.counters.data_sent},
+      {"refresh_sent", s.counters.refresh_sent},
+      {"overruns", s.overruns},
+      {"worst_step_interval_ms", s.worst_interval},
+      {"worst_step_us", static_cast<double>(s.worst_step_ns) * 1e-3},
+      {"wakeup_latency_us",
+       {{"p50", optional(board.wakeup_p50_us)},
+        {"p99", optional(board.wakeup_p99_us)},
+        {"max", optional(board.wakeup_max_us)}}},
+      {"encoder", {{"edges", s.encoder_edges}, {"illegal", s.encoder_illegal}, {"lost", s.encoder_lost}}},
+      {"modbus",
+       {{"polls", optional(board.modbus_polls)},
+        {"errors", optional(board.modbus_errors)},
+        {"timeouts", optional(board.modbus_timeouts)},
+        {"reconnects", optional(board.modbus_reconnects)}}},
+      {"minor_faults", optional(board.minor_faults)},
+  };
+}
+
+}  // namespace lever::app

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# lever-fw as a user runs it: help and version, every kind of configuration error (message and exit 2),
+# the example configurations, --check-config round trips, and --sim with its status lines.
+# usage: lever_fw_cli.sh path/to/lever-fw path/to/firmware/config
+set -uo pipefail
+fw=$1
+examples=$2
+source "$(dirname "$0")/lib.sh"
+bad_config() {  # NAME EXPECTED_MESSAGE TOML
+  local name=$1 expected=$2
+  printf '%s\n' "$3" >"$work/bad.toml"
+  "$fw" --config "$work/bad.toml" --check-config >"$work/out" 2>"$work/err"
+  local code=$?
+  check "$name: exit code 2 (got $code)" test "$code" -eq 2
+  check "$name: names the file and says '$expected' (got: $(cat "$work/err"))" \
+    grep -qF -- "$work/bad.toml" "$work/err"
+  check "$name: says '$expected'" grep -qF -- "$expected" "$work/err"
+  check "$name: prints no configuration" test ! -s "$work/out"
+}
+
+"$fw" --help >"$work/help"; check "--help exits 0" test $? -eq 0
+check "--help documents --sim and the exit codes" grep -q -- "--sim" "$work/help"
+check "--help documents the exit codes" grep -q "2 bad input" "$work/help"
+"$fw" --version >"$work/version"; check "--version exits 0" test $? -eq 0
+check "--version names the program" grep -q "lever-fw" "$work/version"
+"$fw" >/dev/null 2>"$work/err"; check "no --config: exit 2" test $? -eq 2
+
+bad_config "unknown key" "codec.motion.q: unknown key" $'[codec.motion]\nq = 0.1'
+bad_config "unknown section" "sensor.x: unknown key" $'[sensor]\nx = 1'
+bad_config "wrong type" "lever.pair: must be a whole number in [0, 15], got a string" $'[lever]\npair = "one"'
+bad_config "out of range" "link.comms_timeout_ms: must be a whole number in [1, 60000], got 0" $'[link]\ncomms_timeout_ms = 0'
+bad_config "fraction where a whole number belongs" "got 2.5" $'[link]\nheartbeat_ms = 2.5'
+bad_config "NaN" "codec.force.p: must be a number in [0.0, 6.5535], got nan" $'[codec.force]\np = nan'
+bad_config "infinity" "safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = inf'
+bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, index, got 'magnet'" $'[homing]\nmethod = "magnet"'
+bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
+bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
+bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
+bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]\nfilter_hz = 800'
+"$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
+check "missing file: exit 2" test "$code" -eq 2
+check "missing file: says why" grep -q "missing.toml: cannot read: No such file" "$work/err"
+
+"$fw" --config "$examples/top-float32.toml" --check-config >"$work/f32"; code=$?
+check "example top-float32.toml is valid" test "$code" -eq 0
+check "example top-float32.toml reads a float32 from input registers" \
+  grep -qE '^(function = "input"|type = "float32")' "$work/f32"
+bad_config "a Modbus amplifier's host that is a name, not an address" "board.gauge" $'[board.gauge]\nhost = "amplifier.local"'
+bad_config "a baud rate that is not standard" "board.gauge" $'[board.gauge]\ntransport = "rtu"\nbaud = 12345'
+for role in hsi top; do
+  "$fw" --config "$examples/$role.toml" --check-config >"$work/$role.out"; code=$?
+  check "example $role.toml is valid" test "$code" -eq 0
+  grep -v '^#' "$work/$role.out" >"$work/$role.toml"
+  "$fw" --config "$work/$role.toml" --check-config | grep -v '^#' >"$work/$role.again"
+  check "example $role.toml: the printed configuration loads back to itself" cmp -s "$work/$role.toml" "$work/$role.again"
+  check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
+done
+# The examples are every key at its default: they cannot drift from the program.
+: >"$work/empty.toml"
+for role in hsi top; do
+  "$fw" --config "$work/empty.toml" --role "$role" --check-config | sed 1d >"$work/defaults.$role"
+  sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
+  check "example $role.toml lists every key at its default" cmp -s "$work/defaults.$role" "$work/example.$role"
+done
+"$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
+check "--role overrides the file" grep -q '^role = "top"' "$work/override"
+
+"$fw" --config "$examples/top.toml" --sim --fast --duration 2 --stats-json >"$work/stats" 2>"$work/err"; code=$?
+check "--sim exits 0" test "$code" -eq 0
+check "--sim prints a status line a second" test "$(wc -l <"$work/stats")" -ge 3
+check "status lines are JSON with the documented fields" \
+  jq -e 'has("role") and has("state") and has("faults") and has("position_valid") and has("force_n") and
+         has("wakeup_latency_us") and has("encoder") and has("modbus") and .role == "top"' "$work/stats" >/dev/null
+check "the simulated TOP homes and arms" jq -se 'map(.state) | index("armed") != null' "$work/stats" >/dev/null
+
+"$fw" --config "$examples/top.toml" 2>"$work/err"; code=$?
+check "without --sim this version says what a board run lacks (exit 1)" test "$code" -eq 1
+check "and names it" grep -q "Modbus" "$work/err"
+
+report "lever-fw cli"
