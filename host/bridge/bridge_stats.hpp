@@ -31,20 +31,19 @@ struct DirectionCounters {
 
 struct BridgeCounters {
   DirectionCounters to_network, from_network;
-  std::uint64_t send_failures = 0;        // sendto failed (no route, buffer full)
-  std::uint64_t peer_unreachable = 0;     // ICMP reports that the peer's address or port does not answer
-  std::uint64_t auth_failures = 0;        // bad tag: forged, tampered, wrong key
-  std::uint64_t malformed = 0;            // any other decode error (truncated, oversized, bad fields, not ours)
-  std::uint64_t foreign_source = 0;       // from an address other than the peer
-  std::uint64_t reflected = 0;            // carrying our own site id
-  std::uint64_t duplicates = 0;           // replay window: seen before
-  std::uint64_t too_old = 0;              // replay window: behind the window
-  std::uint64_t reordered = 0;            // accepted, but older than the newest
-  std::uint64_t sequence_gaps = 0;        // sequence numbers skipped (lost or still to come)
-  std::uint64_t can_down_drops = 0;       // frames from the network dropped while the CAN interface was down
-  std::uint64_t can_tx_full = 0;          // frames from the network the CAN queue refused
-  std::uint64_t can_reopens = 0;          // the interface came back
-  std::uint64_t can_rx_kernel_drops = 0;  // frames the kernel dropped before we read them (receive queue full)
+  std::uint64_t send_failures = 0;     // sendto failed (no route, buffer full)
+  std::uint64_t peer_unreachable = 0;  // ICMP reports that the peer's address or port does not answer
+  std::uint64_t auth_failures = 0;     // bad tag: forged, tampered, wrong key
+  std::uint64_t malformed = 0;         // any other decode error (truncated, oversized, bad fields, not ours)
+  std::uint64_t foreign_source = 0;    // from an address other than the peer
+  std::uint64_t reflected = 0;         // carrying our own site id
+  std::uint64_t duplicates = 0;        // replay window: seen before
+  std::uint64_t too_old = 0;           // replay window: behind the window
+  std::uint64_t reordered = 0;         // accepted, but older than the newest
+  std::uint64_t sequence_gaps = 0;     // sequence numbers skipped (lost or still to come)
+  std::uint64_t can_down_drops = 0;    // frames from the network dropped while the CAN interface was down
+  std::uint64_t can_tx_full = 0;       // frames from the network the CAN queue refused
+  std::uint64_t can_reopens = 0;       // the interface came back
   std::uint64_t probes_sent = 0, probe_replies = 0;
 };
 

@@ -51,10 +51,14 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     error = udp_.error_text();
     return false;
   }
-  if (!can_.open(config.can_interface)) {
-    error = can_.error_text();
+  linux_io::SocketCanConfig can_config;
+  can_config.interface = config.can_interface;
+  auto can = linux_io::SocketCan::open(can_config);
+  if (!can) {
+    error = can.error().message;
     return false;
   }
+  can_.emplace(std::move(can).value());
 
   sigset_t signals;
   sigemptyset(&signals);
@@ -66,7 +70,8 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     error = fmt::format("signalfd/timerfd: {}", std::strerror(errno));
     return false;
   }
-  // A 50 ms housekeeping tick: stats, probes and reopening the CAN interface; nothing on the relay path.
+  // A 50 ms housekeeping tick: stats, probes and following a CAN interface that went down; nothing on the relay
+  // path.
   itimerspec tick{{0, 50'000'000}, {0, 50'000'000}};
   ::timerfd_settime(timer_fd_.get(), 0, &tick, nullptr);
 
@@ -108,11 +113,11 @@ void Relay::relay_can_to_network() {
   std::int64_t timestamp = 0;
   while (d.frame_count < kMaxFrames && !can_down_) {
     protocol::CanFrame frame;
-    const auto status = can_.read(frame, timestamp);
+    const auto status = can_->read(frame, timestamp);
     if (status == linux_io::IoStatus::skipped) continue;
-    if (status == linux_io::IoStatus::interface_down || status == linux_io::IoStatus::error) {
-      can_down_ = true;
-      can_.close();
+    if (status == linux_io::IoStatus::interface_down || status == linux_io::IoStatus::interface_gone ||
+        status == linux_io::IoStatus::error) {
+      can_down_ = true;  // the socket stays: check_can() follows the interface until it is back
       break;
     }
     if (status != linux_io::IoStatus::ok) break;
@@ -212,7 +217,7 @@ void Relay::handle_data(const Datagram& d, std::int64_t arrival_us) {
       ++counters_.can_down_drops;
       continue;
     }
-    const auto status = can_.write(frame);
+    const auto status = can_->write(frame);
     if (status == linux_io::IoStatus::ok) {
       ++counters_.from_network.frames;
       bus_bits_ += static_cast<std::uint64_t>(protocol::frame_bits_worst_case(frame.dlc));
@@ -222,15 +227,12 @@ void Relay::handle_data(const Datagram& d, std::int64_t arrival_us) {
     } else {
       ++counters_.can_down_drops;
       can_down_ = true;
-      can_.close();
     }
   }
 }
 
-void Relay::try_reopen_can() {
-  const std::uint32_t drops_before = can_.kernel_drops();  // the new socket counts from zero
-  if (!can_.open(config_.can_interface)) return;
-  counters_.can_rx_kernel_drops += drops_before;
+void Relay::check_can() {
+  if (can_->recover() != linux_io::LinkState::up) return;
   can_down_ = false;
   ++counters_.can_reopens;
   fmt::print(stderr, "lever-bridge: {} is back\n", config_.can_interface);
@@ -241,9 +243,9 @@ void Relay::on_timer() {
   while (::read(timer_fd_.get(), &expirations, sizeof expirations) > 0) {
   }
   const std::int64_t now = steady_us();
-  if (can_down_ && now - last_reopen_us_ >= 500'000) {
-    last_reopen_us_ = now;
-    try_reopen_can();
+  if (can_down_ && now - last_can_check_us_ >= 500'000) {
+    last_can_check_us_ = now;
+    check_can();
   }
   if (now - last_probe_us_ >= static_cast<std::int64_t>(config_.probe_interval_s * 1e6)) {
     last_probe_us_ = now;
@@ -299,7 +301,7 @@ void Relay::print_stats(double interval_s) {
       {"bus_load", static_cast<double>(bus_bits_ - bus_bits_at_last_stats_) / (config_.can_bitrate * interval_s)},
       {"can", can_down_ ? "down" : "up"},
       {"can_reopens", c.can_reopens},
-      {"can_rx_kernel_drops", c.can_rx_kernel_drops + can_.kernel_drops()},
+      {"can_rx_kernel_drops", can_->kernel_drops()},
   };
   if (recorder_) {
     const auto r = recorder_->stats();
@@ -320,7 +322,7 @@ int Relay::run() {
     pollfd fds[4] = {{signal_fd_.get(), POLLIN, 0},
                      {timer_fd_.get(), POLLIN, 0},
                      {udp_.fd(), POLLIN, 0},
-                     {can_down_ ? -1 : can_.fd(), POLLIN, 0}};
+                     {can_down_ ? -1 : can_->fd(), POLLIN, 0}};
     if (::poll(fds, 4, -1) < 0) {
       if (errno == EINTR) continue;
       fmt::print(stderr, "lever-bridge: poll: {}\n", std::strerror(errno));

@@ -3,6 +3,7 @@
 // datagrams back onto the bus, probes for round trip and clock offset, stats, and a recorder fed off the path.
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "bridge_config.hpp"
 #include "bridge_stats.hpp"
@@ -31,12 +32,12 @@ class Relay {
   void on_timer();
   bool send(Datagram& d);
   void print_stats(double interval_s);
-  void try_reopen_can();
+  void check_can();
 
   BridgeConfig config_;
   Key key_{};
   std::uint8_t site_id_ = 0;
-  linux_io::SocketCan can_;
+  std::optional<linux_io::SocketCan> can_;  // opened by start()
   linux_io::UdpSocket udp_;
   linux_io::SocketAddress peer_;
   linux_io::UniqueFd signal_fd_, timer_fd_;
@@ -49,7 +50,7 @@ class Relay {
   LatencyHistogram latency_;
   ClockEstimate clock_;
   bool can_down_ = false;
-  std::int64_t started_us_ = 0, last_stats_us_ = 0, last_probe_us_ = 0, last_reopen_us_ = 0;
+  std::int64_t started_us_ = 0, last_stats_us_ = 0, last_probe_us_ = 0, last_can_check_us_ = 0;
   bool warned_reflection_ = false;
 };
 
