@@ -33,17 +33,62 @@ linux_io::GpioEncoderConfig encoder_config(const BoardConfig& b) {
 linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
   linux_io::ModbusGaugeConfig c;
   if (b.gauge_transport == "rtu") {
-    c.transport = linux_io::ModbusRtuEndpoint{b.gauge_device, static_cast<int>(b.gauge_baud), b.gauge_parity, 8,
-                                              static_cast<int>(b.gauge_stop_bits), static_cast<int>(b.gauge_slave_id)};
+    c.transport = linux_io::ModbusRtuEndpoint{b.gauge_device,
+                                              static_cast<int>(b.gauge_baud),
+                                              b.gauge_parity,
+                                              8,
+                                              static_cast<int>(b.gauge_stop_bits),
+                                              static_cast<int>(b.gauge_slave_id)};
   } else {
-    c.transport = linux_io::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port),
-                                              static_cast<int>(b.gauge_unit_id)};
+    c.transport =
+        linux_io::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port), static_cast<int>(b.gauge_unit_id)};
   }
   c.registers = b.gauge_registers;
   c.registers.saturation_raw_min = b.gauge_saturation_raw_min;
   c.registers.saturation_raw_max = b.gauge_saturation_raw_max;
   c.poll_period = std::chrono::microseconds(b.gauge_poll_us);
   c.response_timeout = std::chrono::microseconds(b.gauge_timeout_us);
+  return c;
+}
+
+linux_io::PwmMotorConfig motor_config(const BoardConfig& b) {
+  linux_io::PwmMotorConfig c;
+  c.sysfs_root = b.motor_sysfs_root;
+  c.pwm_chip = static_cast<unsigned>(b.motor_pwm_chip);
+  c.pwm_channel = static_cast<unsigned>(b.motor_pwm_channel);
+  c.period_ns = static_cast<std::uint32_t>(b.motor_period_ns);
+  c.pwm_inversed = b.motor_pwm_inversed;
+  c.torque_constant_nm_per_a = b.motor_torque_constant_nm_per_a;
+  c.gear_ratio = b.motor_gear_ratio;
+  c.full_scale_current_a = b.motor_full_scale_current_a;
+  c.max_duty = b.motor_max_duty;
+  c.deadband_nm = b.motor_deadband_nm;
+  auto line = [&](const std::string& name) -> std::optional<linux_io::MotorLineConfig> {
+    if (name.empty()) return std::nullopt;
+    return linux_io::MotorLineConfig{b.motor_line_chip, linux_io::LineRef::parse(name), b.motor_lines_active_low};
+  };
+  c.enable_line = line(b.motor_enable_line);
+  c.direction_line = line(b.motor_direction_line);
+  c.fault_line = line(b.motor_fault_line);
+  c.positive_torque_only = !c.direction_line;
+  return c;
+}
+
+linux_io::RealtimeConfig realtime_config(const BoardConfig& b) {
+  linux_io::RealtimeConfig c;
+  c.fifo_priority = static_cast<int>(b.realtime_priority);
+  if (!b.realtime_cpus.empty()) c.cpus = linux_io::parse_cpu_list(b.realtime_cpus).value_or(std::vector<unsigned>{});
+  c.lock_memory = b.realtime_lock_memory;
+  c.prefault_stack_bytes = static_cast<std::size_t>(b.realtime_prefault_stack_kib) * 1024;
+  return c;
+}
+
+linux_io::BoardCanPortConfig can_config(const FwConfig& config) {
+  linux_io::BoardCanPortConfig c;
+  c.interface = config.board.can_interface;
+  c.pair = config.lever.pair;
+  c.link_retry_ms = static_cast<std::uint32_t>(config.board.can_link_retry_ms);
+  c.link_retry_max_ms = static_cast<std::uint32_t>(config.board.can_link_retry_max_ms);
   return c;
 }
 
@@ -128,6 +173,9 @@ ConfigSchema schema_for(FwConfig& config) {
 
   auto& b = config.board;
   s.text("board.can.interface", b.can_interface, "SocketCAN interface");
+  s.integer("board.can.link_retry_ms", b.can_link_retry_ms, 1, 60000, "ms",
+            "a link that is down is checked again after...");
+  s.integer("board.can.link_retry_max_ms", b.can_link_retry_max_ms, 1, 600000, "ms", "...doubling up to this");
   s.text("board.encoder.chip", b.encoder_chip, "GPIO chip: path, name or label");
   s.text("board.encoder.line_a", b.encoder_line_a, "line A by name or offset");
   s.text("board.encoder.line_b", b.encoder_line_b, "line B by name or offset");
@@ -171,6 +219,32 @@ ConfigSchema schema_for(FwConfig& config) {
            "a raw value at or above is the amplifier's range end");
   s.integer("board.gauge.poll_us", b.gauge_poll_us, 100, 10000000, "us", "poll period (RTU at 115200 baud: 5-10 ms)");
   s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us", "response timeout");
+
+  s.text("board.motor.sysfs_root", b.motor_sysfs_root, "where sysfs is (tests: a tree of their own)");
+  s.integer("board.motor.pwm_chip", b.motor_pwm_chip, 0, 1023, "", "class/pwm/pwmchipN");
+  s.integer("board.motor.pwm_channel", b.motor_pwm_channel, 0, 1023, "", "the chip's channel");
+  s.integer("board.motor.period_ns", b.motor_period_ns, 1000, 100000000, "ns", "PWM period (50000: 20 kHz)");
+  s.boolean("board.motor.pwm_inversed", b.motor_pwm_inversed, "the board inverts the PWM on its way to the driver");
+  s.number("board.motor.torque_constant_nm_per_a", b.motor_torque_constant_nm_per_a, 1e-6, 100.0, "N m/A",
+           "the motor's Kt");
+  s.number("board.motor.gear_ratio", b.motor_gear_ratio, 1e-3, 1000.0, "", "lever torque per motor torque");
+  s.number("board.motor.full_scale_current_a", b.motor_full_scale_current_a, 1e-3, 1000.0, "A",
+           "the driver's current at 100 % duty");
+  s.number("board.motor.max_duty", b.motor_max_duty, 0.0, 1.0, "", "the duty never goes above this");
+  s.number("board.motor.deadband_nm", b.motor_deadband_nm, 0.0, 100.0, "N m", "smaller torques give zero duty");
+  s.text("board.motor.line_chip", b.motor_line_chip, "GPIO chip of the driver's lines");
+  s.text("board.motor.enable_line", b.motor_enable_line, "driver enable (output) by name or offset; empty: none");
+  s.text("board.motor.direction_line", b.motor_direction_line,
+         "direction (output; asserted: negative torque); empty: positive torque only");
+  s.text("board.motor.fault_line", b.motor_fault_line, "driver fault (input); empty: none");
+  s.boolean("board.motor.lines_active_low", b.motor_lines_active_low, "the driver's lines are active low");
+
+  s.integer("board.realtime.priority", b.realtime_priority, 0, 99, "", "SCHED_FIFO priority (0: none)");
+  s.text("board.realtime.cpus", b.realtime_cpus,
+         "the loop's CPUs, as taskset takes them (\"2\", \"0,2-3\"); empty: any");
+  s.boolean("board.realtime.lock_memory", b.realtime_lock_memory, "mlockall, so no page fault stalls a step");
+  s.integer("board.realtime.prefault_stack_kib", b.realtime_prefault_stack_kib, 0, 65536, "KiB",
+            "stack touched at start");
   return s;
 }
 
@@ -199,6 +273,11 @@ LoadedConfig load_fw_config(const std::string& path) {
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
   if (const auto problem = linux_io::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
+  if (const auto p = motor_config(out.config.board).validate(); !p.empty()) return fail("board.motor", p.front());
+  if (!out.config.board.realtime_cpus.empty() && !linux_io::parse_cpu_list(out.config.board.realtime_cpus))
+    return fail("board.realtime.cpus", "not a CPU list like \"2\" or \"0,2-3\"");
+  if (const auto p = realtime_config(out.config.board).validate(); !p.empty()) return fail("board.realtime", p.front());
+  if (const auto p = can_config(out.config).validate(); !p.empty()) return fail("board.can", p.front());
   if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
   return out;
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <thread>
 
+#include "lever/app/board_runner.hpp"
 #include "lever/app/fw_config.hpp"
 #include "lever/app/stats_line.hpp"
 #include "lever/cli/parse.hpp"
@@ -19,7 +20,6 @@ namespace {
 
 using namespace lever;
 
-constexpr int kRuntimeFailure = 1;
 constexpr int kBadInput = cli::kBadInput;
 constexpr const char* kVersion = "lever-fw 0.1.0";
 
@@ -101,8 +101,5 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   if (sim) return run_sim(config, duration_s, stats_json, fast);
-  fmt::print(stderr,
-             "lever-fw: this version cannot drive a board yet: the Modbus strain gauge and PWM motor backends are "
-             "not part of it. Use --sim to run against the simulated testbed, or --check-config.\n");
-  return kRuntimeFailure;
+  return app::run_board(config, stats_json, g_stop);
 }

@@ -4,11 +4,16 @@ namespace lever::app {
 
 std::string state_name(protocol::LeverState s) {
   switch (s) {
-    case protocol::LeverState::init: return "init";
-    case protocol::LeverState::disarmed: return "disarmed";
-    case protocol::LeverState::armed: return "armed";
-    case protocol::LeverState::fault: return "fault";
-    case protocol::LeverState::homing: return "homing";
+    case protocol::LeverState::init:
+      return "init";
+    case protocol::LeverState::disarmed:
+      return "disarmed";
+    case protocol::LeverState::armed:
+      return "armed";
+    case protocol::LeverState::fault:
+      return "fault";
+    case protocol::LeverState::homing:
+      return "homing";
   }
   return "unknown";
 }

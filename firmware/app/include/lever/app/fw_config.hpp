@@ -5,8 +5,11 @@
 
 #include "lever/app/config_schema.hpp"
 #include "lever/fw/lever_config.hpp"
+#include "lever/linux/board_can_port_config.hpp"
 #include "lever/linux/gpio_encoder_config.hpp"
 #include "lever/linux/modbus_gauge_config.hpp"
+#include "lever/linux/pwm_motor_config.hpp"
+#include "lever/linux/realtime_config.hpp"
 
 namespace lever::app {
 
@@ -28,21 +31,44 @@ struct BoardConfig {
   linux_io::Parity gauge_parity = linux_io::Parity::none;
   // Default: the common layout of a weighing amplifier, the gross weight as a 32-bit integer in holding
   // registers 0-1, high word first, in grams (linux_io::preset_gross_weight_int32).
-  linux_io::GaugeRegisterMap gauge_registers{linux_io::RegisterFunction::holding, 0, linux_io::RegisterType::int32,
-                                             linux_io::WordOrder::high_first, 9.80665e-3, 0.0};
+  linux_io::GaugeRegisterMap gauge_registers{
+      linux_io::RegisterFunction::holding, 0,          linux_io::RegisterType::int32,
+      linux_io::WordOrder::high_first,     9.80665e-3, 0.0};
   double gauge_saturation_raw_min = -1e15, gauge_saturation_raw_max = 1e15;
   std::int64_t gauge_poll_us = 5000, gauge_timeout_us = 20000;
+
+  // The motor: a sysfs PWM channel and optional enable, direction and fault lines ("" : none).
+  std::string motor_sysfs_root = "/sys";
+  std::int64_t motor_pwm_chip = 0, motor_pwm_channel = 0, motor_period_ns = 50000;
+  bool motor_pwm_inversed = false;
+  double motor_torque_constant_nm_per_a = 0.05, motor_gear_ratio = 1.0, motor_full_scale_current_a = 20.0;
+  double motor_max_duty = 0.95, motor_deadband_nm = 0.0;
+  std::string motor_line_chip = "gpiochip0";
+  std::string motor_enable_line = "MOTOR_EN", motor_direction_line = "MOTOR_DIR", motor_fault_line = "MOTOR_FAULT";
+  bool motor_lines_active_low = false;
+
+  // The real-time loop.
+  std::int64_t realtime_priority = 80;
+  std::string realtime_cpus;  // "2", "0,2-3"; empty: any
+  bool realtime_lock_memory = true;
+  std::int64_t realtime_prefault_stack_kib = 256;
+
+  std::int64_t can_link_retry_ms = 50, can_link_retry_max_ms = 1000;
 };
 
 // The libgpiod backend's configuration from the board's keys.
 linux_io::GpioEncoderConfig encoder_config(const BoardConfig& board);
 // The Modbus backend's configuration from the board's keys.
 linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& board);
+linux_io::PwmMotorConfig motor_config(const BoardConfig& board);
+linux_io::RealtimeConfig realtime_config(const BoardConfig& board);
 
 struct FwConfig {
   fw::LeverConfig lever{};
   BoardConfig board{};
 };
+
+linux_io::BoardCanPortConfig can_config(const FwConfig& config);
 
 // The schema of a FwConfig: every key, bound to `config`'s fields.
 ConfigSchema schema_for(FwConfig& config);

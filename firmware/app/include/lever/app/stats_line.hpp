@@ -3,10 +3,9 @@
 // documents each field. The loop takes a Snapshot (plain numbers, trivially copyable, so it crosses to the
 // printing thread lock-free); the JSON is made outside the loop.
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "lever/fw/lever.hpp"
 

@@ -1,0 +1,177 @@
+#include "lever/app/board_runner.hpp"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <optional>
+#include <stop_token>
+#include <thread>
+
+#include "lever/app/stats_line.hpp"
+#include "lever/fw/lever.hpp"
+#include "lever/linux/board_can_port.hpp"
+#include "lever/linux/gpio_encoder.hpp"
+#include "lever/linux/latest_value.hpp"
+#include "lever/linux/modbus_gauge.hpp"
+#include "lever/linux/motor_stop_signals.hpp"
+#include "lever/linux/pwm_motor.hpp"
+#include "lever/linux/realtime_loop.hpp"
+
+namespace lever::app {
+namespace {
+
+constexpr int kRuntimeFailure = 1;
+
+// The strain gauge as the core's ForcePort: the Modbus thread's newest sample, stamped on the firmware's
+// clock by its age at this step (the loop sets `now` before each step). A lever that does not read its
+// gauge has none.
+struct GaugePort {
+  const linux_io::ModbusGauge* gauge = nullptr;
+  fw::Tick now_tick = 0;
+  std::int64_t now_ns = 0;
+  std::optional<fw::ForceReading> latest() const noexcept {
+    if (gauge == nullptr) return std::nullopt;
+    const auto s = gauge->latest();
+    if (!s) return std::nullopt;
+    const std::int64_t age_ticks = s->monotonic_ns >= now_ns ? 0 : (now_ns - s->monotonic_ns) / 1'000'000;
+    const fw::Tick tick =
+        static_cast<fw::Tick>(age_ticks) >= now_tick ? 0 : now_tick - static_cast<fw::Tick>(age_ticks);
+    return fw::ForceReading{s->newtons, tick, false, s->saturated};
+  }
+};
+
+struct BoardHal {
+  linux_io::GpioEncoder encoder_;
+  GaugePort force_;
+  linux_io::PwmMotor motor_;
+  linux_io::BoardCanPort can_;
+  linux_io::GpioEncoder& encoder() { return encoder_; }
+  GaugePort& force() { return force_; }
+  linux_io::PwmMotor& motor() { return motor_; }
+  linux_io::BoardCanPort& can() { return can_; }
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(linux_io::RealtimeLoop::monotonic_ns()); }
+};
+static_assert(fw::LeverHal<BoardHal>);
+static_assert(fw::HasStepClock<BoardHal>);
+
+// What the printing thread shows of the loop itself, taken by the loop (its statistics are its own to read).
+struct LoopSample {
+  double p50_us = 0, p99_us = 0, max_us = 0;
+  long minor_faults = 0;  // of the loop's thread since the loop started
+};
+
+long thread_minor_faults() noexcept {
+  rusage usage{};
+  return getrusage(RUSAGE_THREAD, &usage) == 0 ? usage.ru_minflt : 0;
+}
+
+template <typename T>
+std::optional<T> opened(linux_io::Result<T>&& r, std::string_view what) {
+  if (!r) {
+    fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, r.error().message);
+    return std::nullopt;
+  }
+  return std::move(r).value();
+}
+
+template <typename Role>
+int run_lever(const FwConfig& config, BoardHal& hal, std::optional<linux_io::ModbusGauge>& gauge, bool json_lines,
+              const std::atomic<bool>& stop_flag) {
+  auto loop_result = linux_io::RealtimeLoop::open(realtime_config(config.board));
+  if (!loop_result) {
+    fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);
+    return kRuntimeFailure;
+  }
+  auto& loop = loop_result.value();
+  if (!loop.privileged()) fmt::print(stderr, "lever-fw: warning: {}\n", loop.warning());
+  fw::Lever<BoardHal, Role> lever(hal, config.lever);
+
+  // The loop publishes a snapshot every 100 ms; this thread prints one a second, so the loop never formats,
+  // allocates or writes to a pipe that might block.
+  linux_io::LatestValue<Snapshot> latest;
+  linux_io::LatestValue<LoopSample> loop_sample;
+  std::stop_source stop;
+  std::jthread printer([&](std::stop_token token) {
+    while (!token.stop_requested()) {
+      for (int i = 0; i < 10 && !token.stop_requested(); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      const auto s = latest.load();
+      if (!s) continue;
+      BoardStats b;
+      if (const auto l = loop_sample.load()) {
+        b.wakeup_p50_us = l->p50_us;
+        b.wakeup_p99_us = l->p99_us;
+        b.wakeup_max_us = l->max_us;
+        b.minor_faults = static_cast<std::uint64_t>(l->minor_faults);
+      }
+      if (gauge) {
+        const auto c = gauge->counters();
+        b.modbus_polls = c.polls;
+        b.modbus_errors = c.errors;
+        b.modbus_timeouts = c.timeouts;
+        b.modbus_reconnects = c.reconnects;
+      }
+      const auto line = stats_json(*s, b);
+      if (json_lines) {
+        fmt::print("{}\n", line.dump());
+      } else {
+        fmt::print("{} {} position {:+.4f} rad{} torque {:+.3f} N m faults {}\n", line["role"].get<std::string>(),
+                   line["state"].get<std::string>(), s->position_rad, s->position_valid ? "" : " (not homed)",
+                   s->torque_nm, line["faults"].dump());
+      }
+      std::fflush(stdout);
+    }
+  });
+  long faults_at_start = -1;
+  loop.run(
+      [&](fw::Tick now) {
+        if (stop_flag.load(std::memory_order_relaxed) || linux_io::stop_signal_received() != 0) stop.request_stop();
+        hal.force_.now_tick = now;
+        hal.force_.now_ns = linux_io::RealtimeLoop::monotonic_ns();
+        lever.step(now);
+        if (now % 100 == 0) latest.publish(snapshot(lever, now));
+        if (now % 1000 == 0) {  // once a second: a histogram walk and one system call
+          const long faults = thread_minor_faults();
+          if (faults_at_start < 0) faults_at_start = faults;
+          const auto& h = loop.stats().wake_latency;
+          loop_sample.publish({static_cast<double>(h.percentile_us(0.50)), static_cast<double>(h.percentile_us(0.99)),
+                               static_cast<double>(h.max_us()), faults - faults_at_start});
+        }
+      },
+      stop.get_token());
+  printer.request_stop();
+  hal.motor_.command({0.0, false});  // the safe state before the objects go (their destructors stop it again)
+  fmt::print(stderr, "lever-fw: stopped; motor at zero torque and disabled\n");
+  return 0;
+}
+
+}  // namespace
+
+int run_board(const FwConfig& config, bool json_lines, const std::atomic<bool>& stop) {
+  auto encoder = opened(linux_io::GpioEncoder::open(encoder_config(config.board)), "encoder");
+  if (!encoder) return kRuntimeFailure;
+  std::optional<linux_io::ModbusGauge> gauge;
+  const bool uses_gauge =
+      config.lever.role == protocol::Role::top || (config.lever.use_force_sensor && config.lever.display.closed_loop);
+  if (uses_gauge) {
+    gauge = opened(linux_io::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
+    if (!gauge) return kRuntimeFailure;
+  }
+  auto motor = opened(linux_io::PwmMotor::open(motor_config(config.board)), "motor");
+  if (!motor) return kRuntimeFailure;
+  if (auto installed = linux_io::install_motor_stop_signal_handlers(); !installed) {
+    fmt::print(stderr, "lever-fw: cannot install the signal handlers: {}\n", installed.error().message);
+    return kRuntimeFailure;
+  }
+  auto can = opened(linux_io::BoardCanPort::open(can_config(config)), "CAN port");
+  if (!can) return kRuntimeFailure;
+  BoardHal hal{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)};
+  fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",
+             config.lever.role == protocol::Role::hsi ? "HSI" : "TOP", config.lever.pair, config.board.can_interface,
+             hal.encoder_.description(), hal.motor_.description());
+  return config.lever.role == protocol::Role::hsi ? run_lever<fw::HsiRole>(config, hal, gauge, json_lines, stop)
+                                                  : run_lever<fw::TopRole>(config, hal, gauge, json_lines, stop);
+}
+
+}  // namespace lever::app
