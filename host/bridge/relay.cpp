@@ -38,9 +38,9 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   // and the peer's replay window accepts it (docs/datagram-format.md).
   next_sequence_ = static_cast<std::uint64_t>(wall_us());
 
-  const auto local = linux_io::parse_socket_address(config.bind, error);
+  const auto local = platform::parse_socket_address(config.bind, error);
   if (!local) return false;
-  const auto peer = linux_io::parse_socket_address(config.peer, error);
+  const auto peer = platform::parse_socket_address(config.peer, error);
   if (!peer) return false;
   if (local->family() != peer->family()) {
     error = fmt::format("--bind {} and --peer {} are of different address families", config.bind, config.peer);
@@ -51,9 +51,9 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     error = udp_.error_text();
     return false;
   }
-  linux_io::SocketCanConfig can_config;
+  platform::SocketCanConfig can_config;
   can_config.interface = config.can_interface;
-  auto can = linux_io::SocketCan::open(can_config);
+  auto can = platform::SocketCan::open(can_config);
   if (!can) {
     error = can.error().message;
     return false;
@@ -99,7 +99,7 @@ bool Relay::send(Datagram& d) {
   std::array<std::uint8_t, kMaxDatagramSize> buffer;
   const auto encoded = encode(d, key_, buffer);
   if (!encoded) return false;  // cannot happen for frames we built; counted by the caller as a send failure
-  if (udp_.send_to(std::span(buffer.data(), encoded.size), peer_) != linux_io::UdpStatus::ok) {
+  if (udp_.send_to(std::span(buffer.data(), encoded.size), peer_) != platform::UdpStatus::ok) {
     ++counters_.send_failures;
     return false;
   }
@@ -114,13 +114,13 @@ void Relay::relay_can_to_network() {
   while (d.frame_count < kMaxFrames && !can_down_) {
     protocol::CanFrame frame;
     const auto status = can_->read(frame, timestamp);
-    if (status == linux_io::IoStatus::skipped) continue;
-    if (status == linux_io::IoStatus::interface_down || status == linux_io::IoStatus::interface_gone ||
-        status == linux_io::IoStatus::error) {
+    if (status == platform::IoStatus::skipped) continue;
+    if (status == platform::IoStatus::interface_down || status == platform::IoStatus::interface_gone ||
+        status == platform::IoStatus::error) {
       can_down_ = true;  // the socket stays: check_can() follows the interface until it is back
       break;
     }
-    if (status != linux_io::IoStatus::ok) break;
+    if (status != platform::IoStatus::ok) break;
     bus_bits_ += static_cast<std::uint64_t>(protocol::frame_bits_worst_case(frame.dlc));
     if (recorder_) recorder_->record(timestamp != 0 ? timestamp : wall_us(), config_.can_interface, frame);
     if (!config_.allow_to_network.allows(frame.id)) {
@@ -140,8 +140,8 @@ void Relay::relay_network_to_can() {
   std::array<std::uint8_t, kMaxDatagramSize + 1> buffer;
   for (int i = 0; i < kMaxDatagramsPerWakeup; ++i) {
     std::size_t size = 0;
-    linux_io::SocketAddress from;
-    if (udp_.receive(buffer, size, from) != linux_io::UdpStatus::ok) return;
+    platform::SocketAddress from;
+    if (udp_.receive(buffer, size, from) != platform::UdpStatus::ok) return;
     const std::int64_t arrival = steady_us();
     if (!(from == peer_)) {
       ++counters_.foreign_source;  // not even worth a HMAC
@@ -218,11 +218,11 @@ void Relay::handle_data(const Datagram& d, std::int64_t arrival_us) {
       continue;
     }
     const auto status = can_->write(frame);
-    if (status == linux_io::IoStatus::ok) {
+    if (status == platform::IoStatus::ok) {
       ++counters_.from_network.frames;
       bus_bits_ += static_cast<std::uint64_t>(protocol::frame_bits_worst_case(frame.dlc));
       if (recorder_) recorder_->record(wall_us(), record_name, frame);
-    } else if (status == linux_io::IoStatus::would_block) {
+    } else if (status == platform::IoStatus::would_block) {
       ++counters_.can_tx_full;
     } else {
       ++counters_.can_down_drops;
@@ -232,7 +232,7 @@ void Relay::handle_data(const Datagram& d, std::int64_t arrival_us) {
 }
 
 void Relay::check_can() {
-  if (can_->recover() != linux_io::LinkState::up) return;
+  if (can_->recover() != platform::LinkState::up) return;
   can_down_ = false;
   ++counters_.can_reopens;
   fmt::print(stderr, "lever-bridge: {} is back\n", config_.can_interface);

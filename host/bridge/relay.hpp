@@ -9,9 +9,9 @@
 #include "bridge_stats.hpp"
 #include "candump_recorder.hpp"
 #include "datagram.hpp"
-#include "lever/linux/socketcan.hpp"
-#include "lever/linux/udp_socket.hpp"
-#include "lever/linux/unique_fd.hpp"
+#include "lever/platform/socketcan.hpp"
+#include "lever/platform/udp_socket.hpp"
+#include "lever/platform/unique_fd.hpp"
 #include "replay_window.hpp"
 
 namespace lever::bridge {
@@ -37,10 +37,10 @@ class Relay {
   BridgeConfig config_;
   Key key_{};
   std::uint8_t site_id_ = 0;
-  std::optional<linux_io::SocketCan> can_;  // opened by start()
-  linux_io::UdpSocket udp_;
-  linux_io::SocketAddress peer_;
-  linux_io::UniqueFd signal_fd_, timer_fd_;
+  std::optional<platform::SocketCan> can_;  // opened by start()
+  platform::UdpSocket udp_;
+  platform::SocketAddress peer_;
+  platform::UniqueFd signal_fd_, timer_fd_;
   std::unique_ptr<CandumpRecorder> recorder_;
   ReplayWindow<1024> window_;
   std::uint64_t next_sequence_ = 0;

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "lever/linux/modbus_gauge.hpp"
+#include "lever/platform/modbus_gauge.hpp"
 
 namespace lever::test {
 
@@ -23,8 +23,8 @@ bool eventually(Condition condition, std::chrono::milliseconds limit = std::chro
 }
 
 // The registers an amplifier would hold for `value`: the inverse of the decoder, written separately.
-inline std::vector<std::uint16_t> registers_for(double value, linux_io::RegisterType type, linux_io::WordOrder order) {
-  using linux_io::RegisterType;
+inline std::vector<std::uint16_t> registers_for(double value, platform::RegisterType type, platform::WordOrder order) {
+  using platform::RegisterType;
   std::uint32_t bits = 0;
   switch (type) {
     case RegisterType::int16:
@@ -43,7 +43,7 @@ inline std::vector<std::uint16_t> registers_for(double value, linux_io::Register
   }
   const auto high = static_cast<std::uint16_t>(bits >> 16);
   const auto low = static_cast<std::uint16_t>(bits & 0xFFFF);
-  if (order == linux_io::WordOrder::high_first) return {high, low};
+  if (order == platform::WordOrder::high_first) return {high, low};
   return {low, high};
 }
 
@@ -51,9 +51,9 @@ inline std::vector<std::uint16_t> registers_for(double value, linux_io::Register
 // server sees a timeout (and sets a shorter one), even on a loaded machine: a pty's bytes are handed over by a
 // kernel worker thread, which CPU hogs can hold up for tens of milliseconds. The backoff is cut so a test
 // that sees a few reconnects stays short.
-inline linux_io::ModbusGaugeConfig test_config(linux_io::ModbusTransport transport,
-                                               linux_io::GaugeRegisterMap registers = {}) {
-  linux_io::ModbusGaugeConfig config;
+inline platform::ModbusGaugeConfig test_config(platform::ModbusTransport transport,
+                                               platform::GaugeRegisterMap registers = {}) {
+  platform::ModbusGaugeConfig config;
   config.transport = std::move(transport);
   config.registers = registers;
   config.response_timeout = std::chrono::seconds(1);
@@ -63,7 +63,7 @@ inline linux_io::ModbusGaugeConfig test_config(linux_io::ModbusTransport transpo
 }
 
 // The newest sample's sequence number, 0 before the first.
-inline std::uint64_t sequence_of(const linux_io::ModbusGauge& gauge) {
+inline std::uint64_t sequence_of(const platform::ModbusGauge& gauge) {
   const auto sample = gauge.latest();
   return sample ? sample->sequence : 0;
 }

@@ -13,22 +13,22 @@
 namespace lever::test {
 
 struct TypeCase {
-  linux_io::RegisterType type;
-  linux_io::WordOrder order;
+  platform::RegisterType type;
+  platform::WordOrder order;
   double first;
   double second;
 };
 
 // Values whose two words differ, so a swapped word order reads something else; negative ones for signed types.
 inline const std::array<TypeCase, 8> kTypeCases{{
-    {linux_io::RegisterType::int16, linux_io::WordOrder::high_first, 1234, -1234},
-    {linux_io::RegisterType::uint16, linux_io::WordOrder::high_first, 54321, 7},
-    {linux_io::RegisterType::int32, linux_io::WordOrder::high_first, -123456789, 74565},
-    {linux_io::RegisterType::int32, linux_io::WordOrder::low_first, -123456789, 74565},
-    {linux_io::RegisterType::uint32, linux_io::WordOrder::high_first, 4000000000.0, 74565},
-    {linux_io::RegisterType::uint32, linux_io::WordOrder::low_first, 4000000000.0, 74565},
-    {linux_io::RegisterType::float32, linux_io::WordOrder::high_first, static_cast<double>(3.14159274f), -12.5},
-    {linux_io::RegisterType::float32, linux_io::WordOrder::low_first, static_cast<double>(3.14159274f), -12.5},
+    {platform::RegisterType::int16, platform::WordOrder::high_first, 1234, -1234},
+    {platform::RegisterType::uint16, platform::WordOrder::high_first, 54321, 7},
+    {platform::RegisterType::int32, platform::WordOrder::high_first, -123456789, 74565},
+    {platform::RegisterType::int32, platform::WordOrder::low_first, -123456789, 74565},
+    {platform::RegisterType::uint32, platform::WordOrder::high_first, 4000000000.0, 74565},
+    {platform::RegisterType::uint32, platform::WordOrder::low_first, 4000000000.0, 74565},
+    {platform::RegisterType::float32, platform::WordOrder::high_first, static_cast<double>(3.14159274f), -12.5},
+    {platform::RegisterType::float32, platform::WordOrder::low_first, static_cast<double>(3.14159274f), -12.5},
 }};
 
 inline std::int64_t monotonic_now_ns() {
@@ -39,9 +39,9 @@ inline std::int64_t monotonic_now_ns() {
 
 // The server holds `first` in the registers of `function` (and something else in the other table); the gauge
 // must read it, scaled, with a CLOCK_MONOTONIC stamp; then the server changes to `second` and the gauge follows.
-inline void check_reads_and_follows(ModbusTestServer& server, const linux_io::ModbusTransport& transport,
-                                    const TypeCase& type_case, linux_io::RegisterFunction function) {
-  using linux_io::RegisterFunction;
+inline void check_reads_and_follows(ModbusTestServer& server, const platform::ModbusTransport& transport,
+                                    const TypeCase& type_case, platform::RegisterFunction function) {
+  using platform::RegisterFunction;
   constexpr int kAddress = 3;
   constexpr double kScale = 0.5;
   constexpr double kOffset = -2.0;
@@ -53,16 +53,16 @@ inline void check_reads_and_follows(ModbusTestServer& server, const linux_io::Mo
   };
   hold(type_case.first);
 
-  linux_io::GaugeRegisterMap map;
+  platform::GaugeRegisterMap map;
   map.function = function;
   map.address = kAddress;
   map.type = type_case.type;
   map.word_order = type_case.order;
   map.scale = kScale;
   map.offset = kOffset;
-  auto opened = linux_io::ModbusGauge::open(test_config(transport, map));
+  auto opened = platform::ModbusGauge::open(test_config(transport, map));
   REQUIRE(opened.ok());
-  const linux_io::ModbusGauge& gauge = opened.value();
+  const platform::ModbusGauge& gauge = opened.value();
 
   auto holds = [&](double raw) {
     return [&gauge, raw] {

@@ -13,7 +13,7 @@
 #include <string>
 #include <thread>
 
-#include "lever/linux/unique_fd.hpp"
+#include "lever/platform/unique_fd.hpp"
 
 namespace lever::test {
 
@@ -63,7 +63,7 @@ class TcpTestServer final : public ModbusTestServer {
  private:
   void run(const std::stop_token& stop);
   modbus_t* context_;
-  linux_io::UniqueFd listener_;
+  platform::UniqueFd listener_;
   int port_ = 0;
   std::jthread thread_;
 };
@@ -78,8 +78,8 @@ class PtyPair {
   const std::string& slave_path() const { return slave_path_; }
 
  private:
-  linux_io::UniqueFd master_;
-  linux_io::UniqueFd slave_held_open_;
+  platform::UniqueFd master_;
+  platform::UniqueFd slave_held_open_;
   std::string slave_path_;
 };
 

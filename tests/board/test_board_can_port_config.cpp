@@ -6,13 +6,13 @@
 #include <set>
 #include <string>
 
-#include "lever/linux/board_can_port.hpp"
+#include "lever/platform/board_can_port.hpp"
 #include "lever/protocol/messages.hpp"
 
-using lever::linux_io::BoardCanPort;
-using lever::linux_io::BoardCanPortConfig;
-using lever::linux_io::CanFilter;
-using lever::linux_io::lever_pair_filters;
+using lever::platform::BoardCanPort;
+using lever::platform::BoardCanPortConfig;
+using lever::platform::CanFilter;
+using lever::platform::lever_pair_filters;
 
 namespace {
 

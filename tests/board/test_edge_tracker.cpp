@@ -2,14 +2,14 @@
 #include <catch2/catch.hpp>
 #include <vector>
 
-#include "lever/linux/edge_tracker.hpp"
+#include "lever/platform/edge_tracker.hpp"
 
 using lever::fw::ab;
 using lever::fw::AbState;
 using lever::fw::EncoderEdge;
-using lever::linux_io::EdgeTracker;
-using lever::linux_io::EncoderLine;
-using lever::linux_io::LineEvent;
+using lever::platform::EdgeTracker;
+using lever::platform::EncoderLine;
+using lever::platform::LineEvent;
 
 namespace {
 

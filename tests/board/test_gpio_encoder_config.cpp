@@ -3,11 +3,11 @@
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "lever/linux/gpio_encoder.hpp"
+#include "lever/platform/gpio_encoder.hpp"
 
-using lever::linux_io::GpioEncoder;
-using lever::linux_io::GpioEncoderConfig;
-using lever::linux_io::LineRef;
+using lever::platform::GpioEncoder;
+using lever::platform::GpioEncoderConfig;
+using lever::platform::LineRef;
 
 namespace {
 

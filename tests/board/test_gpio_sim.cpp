@@ -20,15 +20,15 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "lever/linux/gpio_encoder.hpp"
+#include "lever/platform/gpio_encoder.hpp"
 
 extern char** environ;
 
 using lever::fw::AbState;
 using lever::fw::EncoderEdge;
-using lever::linux_io::GpioEncoder;
-using lever::linux_io::GpioEncoderConfig;
-using lever::linux_io::LineRef;
+using lever::platform::GpioEncoder;
+using lever::platform::GpioEncoderConfig;
+using lever::platform::LineRef;
 
 namespace {
 

@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <thread>
 
-#include "lever/linux/latest_value.hpp"
+#include "lever/platform/latest_value.hpp"
 
-using lever::linux_io::LatestValue;
+using lever::platform::LatestValue;
 
 namespace {
 

@@ -4,9 +4,9 @@
 #include <catch2/catch.hpp>
 #include <cerrno>
 
-#include "lever/linux/modbus_failure.hpp"
+#include "lever/platform/modbus_failure.hpp"
 
-using namespace lever::linux_io;
+using namespace lever::platform;
 
 TEST_CASE("a timeout and a broken link reconnect, while CRC, exception and protocol errors keep the connection") {
   CHECK(classify_modbus_errno(ETIMEDOUT) == ModbusFailure::timeout);

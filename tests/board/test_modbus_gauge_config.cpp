@@ -4,10 +4,10 @@
 #include <limits>
 #include <string>
 
-#include "lever/linux/modbus_gauge_config.hpp"
-#include "lever/linux/modbus_gauge_presets.hpp"
+#include "lever/platform/modbus_gauge_config.hpp"
+#include "lever/platform/modbus_gauge_presets.hpp"
 
-using namespace lever::linux_io;
+using namespace lever::platform;
 using namespace std::chrono_literals;
 
 namespace {

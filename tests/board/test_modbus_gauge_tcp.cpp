@@ -11,7 +11,7 @@
 #include "gauge_type_cases.hpp"
 #include "modbus_test_servers.hpp"
 
-using namespace lever::linux_io;
+using namespace lever::platform;
 using namespace lever::test;
 using namespace std::chrono_literals;
 

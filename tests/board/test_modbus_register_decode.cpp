@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "lever/linux/modbus_register_decode.hpp"
+#include "lever/platform/modbus_register_decode.hpp"
 
-using lever::linux_io::decode_registers;
-using lever::linux_io::RegisterType;
-using lever::linux_io::WordOrder;
+using lever::platform::decode_registers;
+using lever::platform::RegisterType;
+using lever::platform::WordOrder;
 
 namespace {
 

@@ -12,17 +12,17 @@
 
 #include "alloc_counter.hpp"
 #include "fork_child.hpp"
-#include "lever/linux/motor_stop_signals.hpp"
-#include "lever/linux/pwm_motor.hpp"
-#include "lever/linux/torque_to_duty.hpp"
+#include "lever/platform/motor_stop_signals.hpp"
+#include "lever/platform/pwm_motor.hpp"
+#include "lever/platform/torque_to_duty.hpp"
 #include "pwm_sysfs_tree.hpp"
 
 using lever::fw::MotorCommand;
-using lever::linux_io::LineRef;
-using lever::linux_io::MotorLineConfig;
-using lever::linux_io::PwmMotor;
-using lever::linux_io::PwmMotorConfig;
-using lever::linux_io::TorqueToDuty;
+using lever::platform::LineRef;
+using lever::platform::MotorLineConfig;
+using lever::platform::PwmMotor;
+using lever::platform::PwmMotorConfig;
+using lever::platform::TorqueToDuty;
 using lever::test::PwmSysfsTree;
 using lever::test::wait_status_of_child;
 
@@ -274,10 +274,10 @@ TEST_CASE("PwmMotor: SIGINT and SIGTERM stop the motor in the handler; a second 
   CAPTURE(signal_number);
   PwmSysfsTree tree(kChip, kChannel);
   const int status = wait_status_of_child([&] {
-    if (!lever::linux_io::install_motor_stop_signal_handlers()) return 80;
+    if (!lever::platform::install_motor_stop_signal_handlers()) return 80;
     PwmMotor motor = driving_motor(tree);
     ::raise(signal_number);
-    if (lever::linux_io::stop_signal_received() != signal_number) return 1;
+    if (lever::platform::stop_signal_received() != signal_number) return 1;
     // The handler alone, no destructor: it must have stopped the motor by itself.
     if (!stopped(tree)) return 2;
     ::raise(signal_number);
@@ -303,7 +303,7 @@ TEST_CASE("PwmMotor: a normal exit, exit() or a return from main, with the motor
 TEST_CASE("PwmMotor: abort() (so std::terminate) stops the motor before the process dies", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   const int status = wait_status_of_child([&] {
-    if (!lever::linux_io::install_motor_stop_signal_handlers()) return 80;
+    if (!lever::platform::install_motor_stop_signal_handlers()) return 80;
     PwmMotor motor = driving_motor(tree);
     std::abort();
     return 1;

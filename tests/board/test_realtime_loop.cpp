@@ -13,16 +13,16 @@
 
 #include "fork_child.hpp"
 #include "lever/fw/step_timing.hpp"
-#include "lever/linux/latency_histogram.hpp"
-#include "lever/linux/period_tracker.hpp"
-#include "lever/linux/realtime_loop.hpp"
+#include "lever/platform/latency_histogram.hpp"
+#include "lever/platform/period_tracker.hpp"
+#include "lever/platform/realtime_loop.hpp"
 
 using lever::fw::Tick;
-using lever::linux_io::LatencyHistogram;
-using lever::linux_io::LoopStats;
-using lever::linux_io::PeriodTracker;
-using lever::linux_io::RealtimeConfig;
-using lever::linux_io::RealtimeLoop;
+using lever::platform::LatencyHistogram;
+using lever::platform::LoopStats;
+using lever::platform::PeriodTracker;
+using lever::platform::RealtimeConfig;
+using lever::platform::RealtimeLoop;
 
 namespace {
 
@@ -170,12 +170,12 @@ TEST_CASE("RealtimeConfig: problems name their field; CPU lists parse as taskset
   CHECK(refused.error().message.find("real-time config: period:") == 0);
 
   using V = std::vector<unsigned>;
-  CHECK(lever::linux_io::parse_cpu_list("2") == V{2});
-  CHECK(lever::linux_io::parse_cpu_list("0,2-4") == V{0, 2, 3, 4});
-  CHECK_FALSE(lever::linux_io::parse_cpu_list(""));
-  CHECK_FALSE(lever::linux_io::parse_cpu_list("1,"));
-  CHECK_FALSE(lever::linux_io::parse_cpu_list("3-1"));
-  CHECK_FALSE(lever::linux_io::parse_cpu_list("a"));
+  CHECK(lever::platform::parse_cpu_list("2") == V{2});
+  CHECK(lever::platform::parse_cpu_list("0,2-4") == V{0, 2, 3, 4});
+  CHECK_FALSE(lever::platform::parse_cpu_list(""));
+  CHECK_FALSE(lever::platform::parse_cpu_list("1,"));
+  CHECK_FALSE(lever::platform::parse_cpu_list("3-1"));
+  CHECK_FALSE(lever::platform::parse_cpu_list("a"));
 }
 
 TEST_CASE("RealtimeLoop: run serves increasing ticks from 1 until stopped, and counts what it served", "[loop]") {

@@ -10,7 +10,7 @@
 
 #include "datagram.hpp"
 #include "key.hpp"
-#include "lever/linux/udp_socket.hpp"
+#include "lever/platform/udp_socket.hpp"
 
 namespace {
 
@@ -46,13 +46,13 @@ int main(int argc, char** argv) {
   if (sodium_init() < 0) return 1;
 
   std::string error;
-  const auto local = linux_io::parse_socket_address(from, error);
-  const auto remote = linux_io::parse_socket_address(to, error);
+  const auto local = platform::parse_socket_address(from, error);
+  const auto remote = platform::parse_socket_address(to, error);
   if (!local || !remote) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", error);
     return 2;
   }
-  linux_io::UdpSocket socket;
+  platform::UdpSocket socket;
   if (!socket.open(*local)) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", socket.error_text());
     return 1;
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
       default:
         break;
     }
-    if (socket.send_to(std::span(buffer.data(), size), *remote) == linux_io::UdpStatus::ok) ++sent;
+    if (socket.send_to(std::span(buffer.data(), size), *remote) == platform::UdpStatus::ok) ++sent;
     ::usleep(1000);  // a 1 kHz stream, and no pressure on the receive buffer
   }
   fmt::print("{} {} datagrams sent\n", sent, app.get_option("--kind")->as<std::string>());

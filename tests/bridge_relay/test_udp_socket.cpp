@@ -6,9 +6,9 @@
 #include <catch2/catch.hpp>
 #include <cstring>
 
-#include "lever/linux/udp_socket.hpp"
+#include "lever/platform/udp_socket.hpp"
 
-using namespace lever::linux_io;
+using namespace lever::platform;
 
 namespace {
 

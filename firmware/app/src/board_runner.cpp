@@ -10,13 +10,13 @@
 
 #include "lever/app/stats_line.hpp"
 #include "lever/fw/lever.hpp"
-#include "lever/linux/board_can_port.hpp"
-#include "lever/linux/gpio_encoder.hpp"
-#include "lever/linux/latest_value.hpp"
-#include "lever/linux/modbus_gauge.hpp"
-#include "lever/linux/motor_stop_signals.hpp"
-#include "lever/linux/pwm_motor.hpp"
-#include "lever/linux/realtime_loop.hpp"
+#include "lever/platform/board_can_port.hpp"
+#include "lever/platform/gpio_encoder.hpp"
+#include "lever/platform/latest_value.hpp"
+#include "lever/platform/modbus_gauge.hpp"
+#include "lever/platform/motor_stop_signals.hpp"
+#include "lever/platform/pwm_motor.hpp"
+#include "lever/platform/realtime_loop.hpp"
 
 namespace lever::app {
 namespace {
@@ -27,7 +27,7 @@ constexpr int kRuntimeFailure = 1;
 // clock by its age at this step (the loop sets `now` before each step). A lever that does not read its
 // gauge has none.
 struct GaugePort {
-  const linux_io::ModbusGauge* gauge = nullptr;
+  const platform::ModbusGauge* gauge = nullptr;
   fw::Tick now_tick = 0;
   std::int64_t now_ns = 0;
   std::optional<fw::ForceReading> latest() const noexcept {
@@ -42,15 +42,15 @@ struct GaugePort {
 };
 
 struct BoardHal {
-  linux_io::GpioEncoder encoder_;
+  platform::GpioEncoder encoder_;
   GaugePort force_;
-  linux_io::PwmMotor motor_;
-  linux_io::BoardCanPort can_;
-  linux_io::GpioEncoder& encoder() { return encoder_; }
+  platform::PwmMotor motor_;
+  platform::BoardCanPort can_;
+  platform::GpioEncoder& encoder() { return encoder_; }
   GaugePort& force() { return force_; }
-  linux_io::PwmMotor& motor() { return motor_; }
-  linux_io::BoardCanPort& can() { return can_; }
-  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(linux_io::RealtimeLoop::monotonic_ns()); }
+  platform::PwmMotor& motor() { return motor_; }
+  platform::BoardCanPort& can() { return can_; }
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::RealtimeLoop::monotonic_ns()); }
 };
 static_assert(fw::LeverHal<BoardHal>);
 static_assert(fw::HasStepClock<BoardHal>);
@@ -67,7 +67,7 @@ long thread_minor_faults() noexcept {
 }
 
 template <typename T>
-std::optional<T> opened(linux_io::Result<T>&& r, std::string_view what) {
+std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
   if (!r) {
     fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, r.error().message);
     return std::nullopt;
@@ -76,9 +76,9 @@ std::optional<T> opened(linux_io::Result<T>&& r, std::string_view what) {
 }
 
 template <typename Role>
-int run_lever(const FwConfig& config, BoardHal& hal, std::optional<linux_io::ModbusGauge>& gauge, bool json_lines,
+int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::ModbusGauge>& gauge, bool json_lines,
               const std::atomic<bool>& stop_flag) {
-  auto loop_result = linux_io::RealtimeLoop::open(realtime_config(config.board));
+  auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
   if (!loop_result) {
     fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);
     return kRuntimeFailure;
@@ -89,8 +89,8 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<linux_io::Mod
 
   // The loop publishes a snapshot every 100 ms; this thread prints one a second, so the loop never formats,
   // allocates or writes to a pipe that might block.
-  linux_io::LatestValue<Snapshot> latest;
-  linux_io::LatestValue<LoopSample> loop_sample;
+  platform::LatestValue<Snapshot> latest;
+  platform::LatestValue<LoopSample> loop_sample;
   std::stop_source stop;
   std::jthread printer([&](std::stop_token token) {
     while (!token.stop_requested()) {
@@ -126,9 +126,9 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<linux_io::Mod
   long faults_at_start = -1;
   loop.run(
       [&](fw::Tick now) {
-        if (stop_flag.load(std::memory_order_relaxed) || linux_io::stop_signal_received() != 0) stop.request_stop();
+        if (stop_flag.load(std::memory_order_relaxed) || platform::stop_signal_received() != 0) stop.request_stop();
         hal.force_.now_tick = now;
-        hal.force_.now_ns = linux_io::RealtimeLoop::monotonic_ns();
+        hal.force_.now_ns = platform::RealtimeLoop::monotonic_ns();
         lever.step(now);
         if (now % 100 == 0) latest.publish(snapshot(lever, now));
         if (now % 1000 == 0) {  // once a second: a histogram walk and one system call
@@ -149,22 +149,22 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<linux_io::Mod
 }  // namespace
 
 int run_board(const FwConfig& config, bool json_lines, const std::atomic<bool>& stop) {
-  auto encoder = opened(linux_io::GpioEncoder::open(encoder_config(config.board)), "encoder");
+  auto encoder = opened(platform::GpioEncoder::open(encoder_config(config.board)), "encoder");
   if (!encoder) return kRuntimeFailure;
-  std::optional<linux_io::ModbusGauge> gauge;
+  std::optional<platform::ModbusGauge> gauge;
   const bool uses_gauge =
       config.lever.role == protocol::Role::top || (config.lever.use_force_sensor && config.lever.display.closed_loop);
   if (uses_gauge) {
-    gauge = opened(linux_io::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
+    gauge = opened(platform::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
     if (!gauge) return kRuntimeFailure;
   }
-  auto motor = opened(linux_io::PwmMotor::open(motor_config(config.board)), "motor");
+  auto motor = opened(platform::PwmMotor::open(motor_config(config.board)), "motor");
   if (!motor) return kRuntimeFailure;
-  if (auto installed = linux_io::install_motor_stop_signal_handlers(); !installed) {
+  if (auto installed = platform::install_motor_stop_signal_handlers(); !installed) {
     fmt::print(stderr, "lever-fw: cannot install the signal handlers: {}\n", installed.error().message);
     return kRuntimeFailure;
   }
-  auto can = opened(linux_io::BoardCanPort::open(can_config(config)), "CAN port");
+  auto can = opened(platform::BoardCanPort::open(can_config(config)), "CAN port");
   if (!can) return kRuntimeFailure;
   BoardHal hal{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)};
   fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",

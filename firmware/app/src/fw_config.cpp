@@ -19,21 +19,21 @@ void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<doubl
 
 }  // namespace
 
-linux_io::GpioEncoderConfig encoder_config(const BoardConfig& b) {
-  linux_io::GpioEncoderConfig c;
+platform::GpioEncoderConfig encoder_config(const BoardConfig& b) {
+  platform::GpioEncoderConfig c;
   c.chip = b.encoder_chip;
-  c.line_a = linux_io::LineRef::parse(b.encoder_line_a);
-  c.line_b = linux_io::LineRef::parse(b.encoder_line_b);
-  if (!b.encoder_line_z.empty()) c.line_z = linux_io::LineRef::parse(b.encoder_line_z);
+  c.line_a = platform::LineRef::parse(b.encoder_line_a);
+  c.line_b = platform::LineRef::parse(b.encoder_line_b);
+  if (!b.encoder_line_z.empty()) c.line_z = platform::LineRef::parse(b.encoder_line_z);
   c.active_low = b.encoder_active_low;
   c.edge_latency_us = static_cast<std::uint32_t>(b.encoder_edge_latency_us);
   return c;
 }
 
-linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
-  linux_io::ModbusGaugeConfig c;
+platform::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
+  platform::ModbusGaugeConfig c;
   if (b.gauge_transport == "rtu") {
-    c.transport = linux_io::ModbusRtuEndpoint{b.gauge_device,
+    c.transport = platform::ModbusRtuEndpoint{b.gauge_device,
                                               static_cast<int>(b.gauge_baud),
                                               b.gauge_parity,
                                               8,
@@ -41,7 +41,7 @@ linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
                                               static_cast<int>(b.gauge_slave_id)};
   } else {
     c.transport =
-        linux_io::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port), static_cast<int>(b.gauge_unit_id)};
+        platform::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port), static_cast<int>(b.gauge_unit_id)};
   }
   c.registers = b.gauge_registers;
   c.registers.saturation_raw_min = b.gauge_saturation_raw_min;
@@ -51,8 +51,8 @@ linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
   return c;
 }
 
-linux_io::PwmMotorConfig motor_config(const BoardConfig& b) {
-  linux_io::PwmMotorConfig c;
+platform::PwmMotorConfig motor_config(const BoardConfig& b) {
+  platform::PwmMotorConfig c;
   c.sysfs_root = b.motor_sysfs_root;
   c.pwm_chip = static_cast<unsigned>(b.motor_pwm_chip);
   c.pwm_channel = static_cast<unsigned>(b.motor_pwm_channel);
@@ -63,9 +63,9 @@ linux_io::PwmMotorConfig motor_config(const BoardConfig& b) {
   c.full_scale_current_a = b.motor_full_scale_current_a;
   c.max_duty = b.motor_max_duty;
   c.deadband_nm = b.motor_deadband_nm;
-  auto line = [&](const std::string& name) -> std::optional<linux_io::MotorLineConfig> {
+  auto line = [&](const std::string& name) -> std::optional<platform::MotorLineConfig> {
     if (name.empty()) return std::nullopt;
-    return linux_io::MotorLineConfig{b.motor_line_chip, linux_io::LineRef::parse(name), b.motor_lines_active_low};
+    return platform::MotorLineConfig{b.motor_line_chip, platform::LineRef::parse(name), b.motor_lines_active_low};
   };
   c.enable_line = line(b.motor_enable_line);
   c.direction_line = line(b.motor_direction_line);
@@ -74,17 +74,17 @@ linux_io::PwmMotorConfig motor_config(const BoardConfig& b) {
   return c;
 }
 
-linux_io::RealtimeConfig realtime_config(const BoardConfig& b) {
-  linux_io::RealtimeConfig c;
+platform::RealtimeConfig realtime_config(const BoardConfig& b) {
+  platform::RealtimeConfig c;
   c.fifo_priority = static_cast<int>(b.realtime_priority);
-  if (!b.realtime_cpus.empty()) c.cpus = linux_io::parse_cpu_list(b.realtime_cpus).value_or(std::vector<unsigned>{});
+  if (!b.realtime_cpus.empty()) c.cpus = platform::parse_cpu_list(b.realtime_cpus).value_or(std::vector<unsigned>{});
   c.lock_memory = b.realtime_lock_memory;
   c.prefault_stack_bytes = static_cast<std::size_t>(b.realtime_prefault_stack_kib) * 1024;
   return c;
 }
 
-linux_io::BoardCanPortConfig can_config(const FwConfig& config) {
-  linux_io::BoardCanPortConfig c;
+platform::BoardCanPortConfig can_config(const FwConfig& config) {
+  platform::BoardCanPortConfig c;
   c.interface = config.board.can_interface;
   c.pair = config.lever.pair;
   c.link_retry_ms = static_cast<std::uint32_t>(config.board.can_link_retry_ms);
@@ -192,24 +192,24 @@ ConfigSchema schema_for(FwConfig& config) {
   s.text("board.gauge.device", b.gauge_device, "rtu: serial device");
   s.integer("board.gauge.baud", b.gauge_baud, 1200, 921600, "baud", "rtu: a standard rate");
   s.choice("board.gauge.parity", b.gauge_parity,
-           {{"none", linux_io::Parity::none}, {"even", linux_io::Parity::even}, {"odd", linux_io::Parity::odd}},
+           {{"none", platform::Parity::none}, {"even", platform::Parity::even}, {"odd", platform::Parity::odd}},
            "rtu: parity");
   s.integer("board.gauge.stop_bits", b.gauge_stop_bits, 1, 2, "", "rtu: stop bits");
   s.integer("board.gauge.slave_id", b.gauge_slave_id, 1, 247, "", "rtu: slave id");
   auto& r = b.gauge_registers;
   s.choice("board.gauge.function", r.function,
-           {{"holding", linux_io::RegisterFunction::holding}, {"input", linux_io::RegisterFunction::input}},
+           {{"holding", platform::RegisterFunction::holding}, {"input", platform::RegisterFunction::input}},
            "register table (function code 3 or 4)");
   s.integer("board.gauge.address", r.address, 0, 65535, "", "first register, 0-based (a manual's 40001 is 0)");
   s.choice("board.gauge.type", r.type,
-           {{"int16", linux_io::RegisterType::int16},
-            {"uint16", linux_io::RegisterType::uint16},
-            {"int32", linux_io::RegisterType::int32},
-            {"uint32", linux_io::RegisterType::uint32},
-            {"float32", linux_io::RegisterType::float32}},
+           {{"int16", platform::RegisterType::int16},
+            {"uint16", platform::RegisterType::uint16},
+            {"int32", platform::RegisterType::int32},
+            {"uint32", platform::RegisterType::uint32},
+            {"float32", platform::RegisterType::float32}},
            "register type");
   s.choice("board.gauge.word_order", r.word_order,
-           {{"high_first", linux_io::WordOrder::high_first}, {"low_first", linux_io::WordOrder::low_first}},
+           {{"high_first", platform::WordOrder::high_first}, {"low_first", platform::WordOrder::low_first}},
            "32-bit types: which word the lower address holds");
   s.number("board.gauge.scale", r.scale, -1e12, 1e12, "N", "newtons per raw unit (not 0)");
   s.number("board.gauge.offset", r.offset, -1e12, 1e12, "N", "added after scaling");
@@ -272,9 +272,9 @@ LoadedConfig load_fw_config(const std::string& path) {
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
-  if (const auto problem = linux_io::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
+  if (const auto problem = platform::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
   if (const auto p = motor_config(out.config.board).validate(); !p.empty()) return fail("board.motor", p.front());
-  if (!out.config.board.realtime_cpus.empty() && !linux_io::parse_cpu_list(out.config.board.realtime_cpus))
+  if (!out.config.board.realtime_cpus.empty() && !platform::parse_cpu_list(out.config.board.realtime_cpus))
     return fail("board.realtime.cpus", "not a CPU list like \"2\" or \"0,2-3\"");
   if (const auto p = realtime_config(out.config.board).validate(); !p.empty()) return fail("board.realtime", p.front());
   if (const auto p = can_config(out.config).validate(); !p.empty()) return fail("board.can", p.front());

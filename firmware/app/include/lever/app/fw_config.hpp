@@ -5,11 +5,11 @@
 
 #include "lever/app/config_schema.hpp"
 #include "lever/fw/lever_config.hpp"
-#include "lever/linux/board_can_port_config.hpp"
-#include "lever/linux/gpio_encoder_config.hpp"
-#include "lever/linux/modbus_gauge_config.hpp"
-#include "lever/linux/pwm_motor_config.hpp"
-#include "lever/linux/realtime_config.hpp"
+#include "lever/platform/board_can_port_config.hpp"
+#include "lever/platform/gpio_encoder_config.hpp"
+#include "lever/platform/modbus_gauge_config.hpp"
+#include "lever/platform/pwm_motor_config.hpp"
+#include "lever/platform/realtime_config.hpp"
 
 namespace lever::app {
 
@@ -28,12 +28,12 @@ struct BoardConfig {
   std::int64_t gauge_port = 502, gauge_unit_id = 255;
   std::string gauge_device = "/dev/ttyUSB0";
   std::int64_t gauge_baud = 115200, gauge_stop_bits = 1, gauge_slave_id = 1;
-  linux_io::Parity gauge_parity = linux_io::Parity::none;
+  platform::Parity gauge_parity = platform::Parity::none;
   // Default: the common layout of a weighing amplifier, the gross weight as a 32-bit integer in holding
-  // registers 0-1, high word first, in grams (linux_io::preset_gross_weight_int32).
-  linux_io::GaugeRegisterMap gauge_registers{
-      linux_io::RegisterFunction::holding, 0,          linux_io::RegisterType::int32,
-      linux_io::WordOrder::high_first,     9.80665e-3, 0.0};
+  // registers 0-1, high word first, in grams (platform::preset_gross_weight_int32).
+  platform::GaugeRegisterMap gauge_registers{
+      platform::RegisterFunction::holding, 0,          platform::RegisterType::int32,
+      platform::WordOrder::high_first,     9.80665e-3, 0.0};
   double gauge_saturation_raw_min = -1e15, gauge_saturation_raw_max = 1e15;
   std::int64_t gauge_poll_us = 5000, gauge_timeout_us = 20000;
 
@@ -57,18 +57,18 @@ struct BoardConfig {
 };
 
 // The libgpiod backend's configuration from the board's keys.
-linux_io::GpioEncoderConfig encoder_config(const BoardConfig& board);
+platform::GpioEncoderConfig encoder_config(const BoardConfig& board);
 // The Modbus backend's configuration from the board's keys.
-linux_io::ModbusGaugeConfig gauge_config(const BoardConfig& board);
-linux_io::PwmMotorConfig motor_config(const BoardConfig& board);
-linux_io::RealtimeConfig realtime_config(const BoardConfig& board);
+platform::ModbusGaugeConfig gauge_config(const BoardConfig& board);
+platform::PwmMotorConfig motor_config(const BoardConfig& board);
+platform::RealtimeConfig realtime_config(const BoardConfig& board);
 
 struct FwConfig {
   fw::LeverConfig lever{};
   BoardConfig board{};
 };
 
-linux_io::BoardCanPortConfig can_config(const FwConfig& config);
+platform::BoardCanPortConfig can_config(const FwConfig& config);
 
 // The schema of a FwConfig: every key, bound to `config`'s fields.
 ConfigSchema schema_for(FwConfig& config);

@@ -1,0 +1,70 @@
+#pragma once
+// The lever's motor on a Linux board: the torque's magnitude as the duty cycle of a sysfs PWM channel, its sign
+// on a direction line, the driver's enable and fault lines through libgpiod 1.6; a MotorPort for the core.
+//
+// The motor stops (duty 0, PWM disabled, enable line deasserted) on every way out that runs code in this
+// process: the destructor; exit() with the motor still open (an atexit hook); and, through
+// emergency_stop_all(), a signal handler (install_motor_stop_signal_handlers() in motor_stop_signals.hpp).
+// What stops it when the process cannot run code (kill -9, a kernel panic, power) is the board's:
+// docs/board-motor.md.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "lever/fw/hal.hpp"
+#include "lever/platform/pwm_motor_config.hpp"
+#include "lever/platform/result.hpp"
+
+namespace lever::platform {
+
+struct PwmMotorStats {
+  std::uint64_t commands = 0;
+  std::uint64_t failed_commands = 0;    // commands with a write to the PWM or a line that failed
+  std::uint64_t fault_read_errors = 0;  // fault line reads that failed (each reported as a fault)
+  std::uint32_t duty_ns = 0;            // as last commanded
+  bool negative = false;
+  bool enabled = false;
+};
+
+class PwmMotor {
+ public:
+  // Validates the config, sets up the PWM channel (SysfsPwm: exported if needed, disabled, duty 0, period,
+  // polarity), requests the lines (enable and direction deasserted), and registers for the emergency stop.
+  // Fails naming the file or line and the reason; at most kMaxStoppableMotors (8) are open at a time.
+  static Result<PwmMotor> open(const PwmMotorConfig& config);
+
+  // Move-only. A moved-from motor owns nothing: it may only be destroyed or assigned to. Assigning to a motor
+  // stops the one it held.
+  PwmMotor(PwmMotor&&) noexcept;
+  PwmMotor& operator=(PwmMotor&&) noexcept;
+  PwmMotor(const PwmMotor&) = delete;
+  PwmMotor& operator=(const PwmMotor&) = delete;
+  ~PwmMotor();
+
+  // MotorPort. Enabled: direction (through zero duty when the sign changes), duty, PWM enable, then the
+  // driver's enable line. Disabled: the enable line first, then duty 0 and PWM disable. Only values that
+  // changed are written, each with one pwrite or one ioctl on a file opened at open(); no allocation.
+  // After an emergency stop every command is a disabled one.
+  void command(const fw::MotorCommand& command) noexcept;
+  // The fault line asserted, the line unreadable, the last command's writes failed, or an emergency stop.
+  bool driver_fault() noexcept;
+
+  const PwmMotorStats& stats() const noexcept;
+  // "pwmchip0/pwm1 20000 Hz enable_line=gpiochip1:3 ...", for the log line at start.
+  const std::string& description() const noexcept;
+
+  // Writes duty 0 and disable to the PWM of every open motor in this process, now, and latches: their later
+  // commands are disabled ones. Async-signal-safe: pwrite on files opened beforehand, and atomics. The enable
+  // lines are not touched here (a line is set with an ioctl through libgpiod, not a write); they go off at the
+  // next command(), or in the destructor. A disabled PWM at zero duty already means no torque.
+  static void emergency_stop_all() noexcept;
+
+ private:
+  struct Impl;
+  explicit PwmMotor(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+static_assert(fw::MotorPort<PwmMotor>);
+
+}  // namespace lever::platform

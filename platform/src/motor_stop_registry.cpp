@@ -1,0 +1,86 @@
+#include "motor_stop_registry.hpp"
+
+#include <sched.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstdlib>
+
+#include "sysfs_write.hpp"
+
+namespace lever::platform {
+
+namespace {
+
+struct Slot {
+  std::atomic<bool> taken{false};
+  std::atomic<int> duty_fd{-1};
+  std::atomic<int> enable_fd{-1};
+  std::atomic<pid_t> owner{0};
+};
+
+std::array<Slot, kMaxStoppableMotors> slots;
+std::atomic<int> stops_running{0};
+std::atomic<bool> latched{false};
+std::atomic<bool> exit_hook_installed{false};
+
+// Lock-free atomics are what makes the registry usable from a signal handler.
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free &&
+              std::atomic<pid_t>::is_always_lock_free);
+
+void stop_slots(bool only_own) noexcept {
+  const int saved_errno = errno;
+  latched.store(true);
+  stops_running.fetch_add(1);
+  const pid_t self = only_own ? ::getpid() : 0;
+  for (Slot& slot : slots) {
+    if (only_own && slot.owner.load() != self) continue;
+    const int duty = slot.duty_fd.load();
+    const int enable = slot.enable_fd.load();
+    if (duty >= 0) write_decimal(duty, 0);
+    if (enable >= 0) write_decimal(enable, 0);
+  }
+  stops_running.fetch_sub(1);
+  errno = saved_errno;
+}
+
+// At exit() a motor whose destructor will not run (one on main's stack, when something calls exit()) still
+// stops. Only the process that opened it: a child forked without exec shares the files, and its exit must not
+// stop its parent's motor.
+extern "C" void stop_motors_at_exit() { stop_slots(true); }
+
+}  // namespace
+
+int register_motor_stop(int duty_fd, int enable_fd) noexcept {
+  if (!exit_hook_installed.exchange(true)) std::atexit(stop_motors_at_exit);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    Slot& slot = slots[i];
+    bool expected = false;
+    if (!slot.taken.compare_exchange_strong(expected, true)) continue;
+    slot.owner.store(::getpid());
+    slot.duty_fd.store(duty_fd);
+    slot.enable_fd.store(enable_fd);
+    return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void unregister_motor_stop(int slot_index) noexcept {
+  if (slot_index < 0 || static_cast<std::size_t>(slot_index) >= slots.size()) return;
+  Slot& slot = slots[static_cast<std::size_t>(slot_index)];
+  slot.duty_fd.store(-1);
+  slot.enable_fd.store(-1);
+  // A stop on another thread may hold the old numbers; it is a few writes long. A stop interrupting this very
+  // thread has finished before this line runs again.
+  while (stops_running.load() != 0) ::sched_yield();
+  slot.owner.store(0);
+  slot.taken.store(false);
+}
+
+void emergency_stop_registered_motors() noexcept { stop_slots(false); }
+
+bool emergency_stop_latched() noexcept { return latched.load(); }
+
+}  // namespace lever::platform

@@ -1,0 +1,117 @@
+#include "lever/platform/pwm_motor.hpp"
+
+#include <cerrno>
+#include <utility>
+
+#include "lever/platform/torque_to_duty.hpp"
+#include "motor_lines.hpp"
+#include "motor_stop_registry.hpp"
+#include "sysfs_pwm.hpp"
+
+namespace lever::platform {
+
+struct PwmMotor::Impl {
+  SysfsPwm pwm;
+  MotorLines lines;
+  TorqueToDuty map;
+  int stop_slot;
+  PwmMotorStats stats;
+  bool last_command_failed = false;
+  std::string description;
+
+  Impl(SysfsPwm p, MotorLines l, const PwmMotorConfig& config, int slot, std::string d)
+      : pwm(std::move(p)), lines(std::move(l)), map(config), stop_slot(slot), description(std::move(d)) {}
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  // Stopped before leaving the emergency stop's table: no moment without one or the other. The files close
+  // after this body, once the table no longer holds them.
+  ~Impl() {
+    lines.set_enabled(false);
+    pwm.stop();
+    unregister_motor_stop(stop_slot);
+  }
+
+  bool drive(DutySetpoint setpoint) noexcept {
+    if (setpoint.duty_ns > 0 && setpoint.negative != stats.negative) {
+      // Through zero: the new direction never runs at the old duty, nor the old direction at the new one; and
+      // a direction that could not be set gets no duty at all.
+      if (!pwm.set_duty_ns(0) || !lines.set_negative(setpoint.negative)) return false;
+      stats.negative = setpoint.negative;
+    }
+    bool ok = pwm.set_duty_ns(setpoint.duty_ns);
+    ok &= pwm.set_enabled(true);
+    ok &= lines.set_enabled(true);
+    return ok;
+  }
+
+  bool release() noexcept {
+    bool ok = lines.set_enabled(false);
+    ok &= pwm.set_duty_ns(0);
+    ok &= pwm.set_enabled(false);
+    return ok;
+  }
+};
+
+PwmMotor::PwmMotor(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+PwmMotor::PwmMotor(PwmMotor&&) noexcept = default;
+PwmMotor& PwmMotor::operator=(PwmMotor&&) noexcept = default;
+PwmMotor::~PwmMotor() = default;
+
+Result<PwmMotor> PwmMotor::open(const PwmMotorConfig& config) {
+  if (const auto problems = config.validate(); !problems.empty()) {
+    std::string message = "motor config:";
+    for (const auto& p : problems) message += " " + p + ";";
+    message.pop_back();
+    return Error{message, EINVAL};
+  }
+  auto pwm = SysfsPwm::open(config);
+  if (!pwm) return pwm.error();
+  auto lines = MotorLines::open(config);
+  if (!lines) return lines.error();
+  const int slot = register_motor_stop(pwm.value().duty_fd(), pwm.value().enable_fd());
+  if (slot < 0) {
+    return Error{"motor " + pwm.value().description() + ": " + std::to_string(kMaxStoppableMotors) +
+                     " motors are open already (the emergency stop has room for no more)",
+                 EMFILE};
+  }
+  std::string description = pwm.value().description() + " " + std::to_string(1'000'000'000u / config.period_ns) +
+                            " Hz" + (config.pwm_inversed ? " inversed" : "") + lines.value().description();
+  return PwmMotor(
+      std::make_unique<Impl>(std::move(pwm.value()), std::move(lines.value()), config, slot, std::move(description)));
+}
+
+void PwmMotor::command(const fw::MotorCommand& command) noexcept {
+  if (!impl_) return;
+  Impl& m = *impl_;
+  ++m.stats.commands;
+  const bool enable = command.enable && !emergency_stop_latched();
+  const DutySetpoint setpoint = enable ? m.map(command.torque_nm) : DutySetpoint{};
+  const bool ok = enable ? m.drive(setpoint) : m.release();
+  m.stats.duty_ns = setpoint.duty_ns;
+  m.stats.enabled = enable;
+  m.last_command_failed = !ok;
+  if (!ok) ++m.stats.failed_commands;
+}
+
+bool PwmMotor::driver_fault() noexcept {
+  if (!impl_) return true;
+  Impl& m = *impl_;
+  const std::optional<bool> fault = m.lines.fault();
+  if (!fault) ++m.stats.fault_read_errors;
+  return !fault || *fault || m.last_command_failed || emergency_stop_latched();
+}
+
+const PwmMotorStats& PwmMotor::stats() const noexcept {
+  static const PwmMotorStats none{};
+  return impl_ ? impl_->stats : none;
+}
+
+const std::string& PwmMotor::description() const noexcept {
+  static const std::string moved = "(moved from)";
+  return impl_ ? impl_->description : moved;
+}
+
+void PwmMotor::emergency_stop_all() noexcept { emergency_stop_registered_motors(); }
+
+}  // namespace lever::platform

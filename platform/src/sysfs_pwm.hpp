@@ -1,0 +1,43 @@
+#pragma once
+// One Linux PWM channel through sysfs (<root>/class/pwm/pwmchipN/pwmM/): exported and configured once, then
+// driven by writes on the two files the loop needs, held open. The motor's magnitude channel.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "lever/platform/pwm_motor_config.hpp"
+#include "lever/platform/result.hpp"
+#include "lever/platform/unique_fd.hpp"
+
+namespace lever::platform {
+
+class SysfsPwm {
+ public:
+  // Exports the channel unless pwmM/ is there already (left exported by an earlier run or a boot script: it
+  // is taken over as found), waits for its attributes, and writes enable 0, duty_cycle 0, period and polarity
+  // in the order the kernel accepts from any earlier state.
+  static Result<SysfsPwm> open(const PwmMotorConfig& config);
+
+  // Each writes only when the value differs from the last one written; false when the write failed (the
+  // value is then unknown, and the next call writes again). One pwrite, no allocation.
+  bool set_duty_ns(std::uint32_t ns) noexcept;
+  bool set_enabled(bool enabled) noexcept;
+  // Duty 0 then disabled, written whatever was written before.
+  void stop() noexcept;
+
+  // For the emergency stop, which writes to them from a signal handler.
+  int duty_fd() const noexcept { return duty_.get(); }
+  int enable_fd() const noexcept { return enable_.get(); }
+  const std::string& description() const noexcept { return description_; }  // "pwmchip0/pwm1"
+
+ private:
+  SysfsPwm(UniqueFd duty, UniqueFd enable, std::string description) noexcept;
+
+  UniqueFd duty_;
+  UniqueFd enable_;
+  std::optional<std::uint32_t> duty_written_;
+  std::optional<bool> enabled_written_;
+  std::string description_;
+};
+
+}  // namespace lever::platform
