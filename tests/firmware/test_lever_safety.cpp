@@ -462,3 +462,48 @@ TEST_CASE("a 16-bit hardware counter behind the counting port is unwrapped, not 
   }
   CHECK(truth > 65536 * 5);
 }
+
+namespace {
+
+// A CAN port that can say it lost the bus (a controller gone bus-off, an interface down).
+struct FaultyCanHal : test::FakeHal<> {
+  struct Port : test::CanBus::Port {
+    explicit Port(const test::CanBus::Port& p) : test::CanBus::Port(p) {}
+    bool off = false;
+    bool bus_fault() const { return off; }
+  };
+  explicit FaultyCanHal(test::CanBus& bus) : test::FakeHal<>(bus), port(can_) {}
+  Port port;
+  Port& can() { return port; }
+};
+
+}  // namespace
+
+TEST_CASE("a CAN port that reports bus-off latches CAN_BUS at once, and the TOP holds", "[firmware][lever][can]") {
+  static_assert(HasBusFault<FaultyCanHal::Port>);
+  test::CanBus bus;
+  FaultyCanHal hal(bus);
+  test::FakeHal<> hsi_hal(bus);
+  TopLever<FaultyCanHal> top(hal, test::rig_config(protocol::Role::top));
+  HsiLever<test::FakeHal<>> hsi(hsi_hal, test::rig_config(protocol::Role::hsi));
+  hal.force_.reading = ForceReading{0, 0, false};
+  Tick now = 1;
+  auto tick = [&] {
+    hal.force_.reading->tick = now;
+    hsi.step(now);
+    top.step(now);
+    ++now;
+  };
+  for (int i = 0; i < 60; ++i) tick();
+  bus.inject(protocol::pack(protocol::CommandMessage{}, 0));
+  tick();
+  REQUIRE(top.supervisor().armed());
+  hal.port.off = true;
+  tick();
+  CHECK(top.supervisor().state() == LeverState::fault);
+  CHECK(has(top.supervisor().latched(), Fault::can_bus));
+  hal.port.off = false;
+  bus.inject(protocol::pack(protocol::CommandMessage{protocol::Opcode::rearm}, 0));
+  for (int i = 0; i < 3; ++i) tick();
+  CHECK(top.supervisor().armed());  // back once the bus is, by a re-arm
+}

@@ -17,13 +17,15 @@ enum class Fault : std::uint16_t {
   timing = 1u << 7,           // a step came later than the hard bound, or the clock went back
   homing = 1u << 8,           // homing gave up: no stall or index within its travel or time
   peer_state = 1u << 9,       // the peer left the armed state while this lever was armed (disarm, fault, reboot)
+  can_bus = 1u << 10,         // the CAN controller is bus-off, or its interface is down or gone
 };
 
 using FaultBits = std::uint16_t;
 
-inline constexpr Fault kAllFaults[] = {
-    Fault::comms_timeout, Fault::encoder,        Fault::force_stale, Fault::force_saturated, Fault::motor_driver,
-    Fault::torque_limit,  Fault::position_limit, Fault::timing,      Fault::homing,          Fault::peer_state};
+inline constexpr Fault kAllFaults[] = {Fault::comms_timeout,   Fault::encoder,      Fault::force_stale,
+                                       Fault::force_saturated, Fault::motor_driver, Fault::torque_limit,
+                                       Fault::position_limit,  Fault::timing,       Fault::homing,
+                                       Fault::peer_state,      Fault::can_bus};
 
 constexpr FaultBits bit(Fault f) noexcept { return static_cast<FaultBits>(f); }
 constexpr bool has(FaultBits bits, Fault f) noexcept { return (bits & bit(f)) != 0; }
@@ -51,6 +53,8 @@ constexpr std::string_view name(Fault f) noexcept {
       return "homing";
     case Fault::peer_state:
       return "peer_state";
+    case Fault::can_bus:
+      return "can_bus";
   }
   return "unknown";
 }

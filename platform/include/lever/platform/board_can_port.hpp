@@ -55,6 +55,9 @@ class BoardCanPort {
   bool send(const protocol::CanFrame& frame) noexcept;
 
   LinkState link() const noexcept { return link_; }
+  // The core's optional HasBusFault: bus-off, or the link down or gone. Error-passive is not a fault here: on
+  // a two-node bus it means the peer stopped acknowledging, which the comms timeout already catches.
+  bool bus_fault() const noexcept { return link_ != LinkState::up || monitor_.state() == CanBusState::bus_off; }
   CanBusState bus_state() const noexcept { return monitor_.state(); }
   const CanErrorCounts& bus_counts() const noexcept { return monitor_.counts(); }
   BoardCanStats stats() const noexcept;
@@ -77,5 +80,6 @@ class BoardCanPort {
 };
 
 static_assert(fw::CanPort<BoardCanPort>);
+static_assert(fw::HasBusFault<BoardCanPort>);
 
 }  // namespace lever::platform

@@ -91,6 +91,13 @@ concept CanPort = requires(C& c, protocol::CanFrame& in, const protocol::CanFram
   { c.send(out) } -> std::convertible_to<bool>;
 };
 
+// Optional: the controller can say it cannot reach the bus (bus-off, the interface down or gone). The core
+// then latches CAN_BUS at once instead of waiting out the comms timeout.
+template <typename C>
+concept HasBusFault = requires(const C& c) {
+  { c.bus_fault() } -> std::convertible_to<bool>;
+};
+
 // ---- The board ----
 
 template <typename H>

@@ -123,6 +123,9 @@ class Lever {
     if (decoder_.fault()) f |= bit(Fault::encoder);
     if (hal_.motor().driver_fault()) f |= bit(Fault::motor_driver);
     if (timing_.violated()) f |= bit(Fault::timing);
+    if constexpr (HasBusFault<CanOf<H>>) {
+      if (hal_.can().bus_fault()) f |= bit(Fault::can_bus);
+    }
     return f;
   }
 
