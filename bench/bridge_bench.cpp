@@ -167,7 +167,7 @@ Placement choose_cpus(const std::vector<int>& cpus) {
 
 // One end of the loopback link: the socket and its own address, read back after binding to port 0.
 struct Link {
-  lio::UdpSocket socket;
+  std::optional<lio::UdpSocket> socket;
   lio::SocketAddress address;
   int rcvbuf_granted = 0;  // getsockopt(SO_RCVBUF): the kernel reports twice the usable size
 };
@@ -186,8 +186,10 @@ void open_link(Link& link) {
   std::string error;
   const auto any_port = lio::parse_socket_address("127.0.0.1:0", error);
   if (!any_port) throw SetupError(error);
-  if (!link.socket.open(*any_port)) throw SetupError(link.socket.error_text());
-  const int fd = link.socket.fd();
+  auto opened = lio::UdpSocket::open(*any_port);
+  if (!opened) throw SetupError(opened.error().message);
+  link.socket.emplace(std::move(opened).value());
+  const int fd = link.socket->fd();
   if (::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &kRcvBufRequest, sizeof kRcvBufRequest) != 0)
     throw SetupError(fmt::format("setsockopt(SO_RCVBUF): {}", std::strerror(errno)));
   socklen_t size = sizeof link.rcvbuf_granted;
@@ -264,19 +266,19 @@ void echo_loop(Link& self, const lio::SocketAddress& peer, const lb::Key& key, c
   lio::SocketAddress from;
   std::uint64_t sequence = 0;
   while (!stop.load(std::memory_order_relaxed)) {
-    if (!wait_for(self.socket.fd(), POLLIN, 50)) continue;  // short timeout: notice `stop`
+    if (!wait_for(self.socket->fd(), POLLIN, 50)) continue;  // short timeout: notice `stop`
     std::size_t size = 0;
-    if (self.socket.receive(in, size, from) != lio::UdpStatus::ok || size == 0 || size > in.size()) continue;
+    if (self.socket->receive(in, size, from) != lio::UdpStatus::ok || size == 0 || size > in.size()) continue;
     const std::span<const std::uint8_t> bytes(in.data(), size);
     if (in[0] == kRawMarker) {
-      send_all(self.socket, bytes, peer);
+      send_all(*self.socket, bytes, peer);
       continue;
     }
     const auto verdict = accept_datagram(bytes, from, peer, kSiteA, key, window, received);
     if (!verdict || !verdict->accepted()) continue;
     const auto reply = one_frame(kSiteB, ++sequence, token_of(received.frames[0]), Clock::now());
     const auto encoded = lb::encode(reply, key, out);
-    if (encoded) send_all(self.socket, std::span<const std::uint8_t>(out.data(), encoded.size), peer);
+    if (encoded) send_all(*self.socket, std::span<const std::uint8_t>(out.data(), encoded.size), peer);
   }
 }
 
@@ -298,7 +300,7 @@ class Pinger {
     std::memcpy(payload.data() + 1, &token, sizeof token);
     const std::span<const std::uint8_t> bytes(payload.data(), kOneFrameSize);
     const auto t0 = Clock::now();
-    if (!send_all(self_.socket, bytes, peer_)) return std::nullopt;
+    if (!send_all(*self_.socket, bytes, peer_)) return std::nullopt;
     for (;;) {
       std::size_t size = 0;
       if (!receive(size)) return std::nullopt;
@@ -315,7 +317,7 @@ class Pinger {
     const auto request = one_frame(kSiteA, ++sequence_, token, t0);
     const auto encoded = lb::encode(request, key_, out_);
     if (!encoded) return std::nullopt;
-    if (!send_all(self_.socket, std::span<const std::uint8_t>(out_.data(), encoded.size), peer_)) return std::nullopt;
+    if (!send_all(*self_.socket, std::span<const std::uint8_t>(out_.data(), encoded.size), peer_)) return std::nullopt;
     for (;;) {
       std::size_t size = 0;
       if (!receive(size)) return std::nullopt;
@@ -329,8 +331,8 @@ class Pinger {
   // poll() then recvfrom(), the bridge's way of waiting.
   bool receive(std::size_t& size) {
     for (;;) {
-      if (!wait_for(self_.socket.fd(), POLLIN, kReplyTimeoutMs)) return false;
-      const auto status = self_.socket.receive(in_, size, from_);
+      if (!wait_for(self_.socket->fd(), POLLIN, kReplyTimeoutMs)) return false;
+      const auto status = self_.socket->receive(in_, size, from_);
       if (status == lio::UdpStatus::ok) return size <= in_.size();
       if (status != lio::UdpStatus::would_block) return false;
     }
@@ -463,7 +465,7 @@ SendTally send_frames(Link& self, const lio::SocketAddress& peer, const lb::Key&
     }
     const auto encoded = lb::encode(one_frame(kSiteA, i + 1, i, now), key, out);
     if (!encoded ||
-        !send_all(self.socket, std::span<const std::uint8_t>(out.data(), encoded.size), peer, &tally.send_waits)) {
+        !send_all(*self.socket, std::span<const std::uint8_t>(out.data(), encoded.size), peer, &tally.send_waits)) {
       ++tally.send_errors;
       continue;
     }
@@ -510,9 +512,9 @@ ReceiveTally receive_frames(Link& self, const lio::SocketAddress& peer, const lb
       if (tally.accepted + tally.duplicates + tally.too_old + tally.rejected >= total) break;
       if (Clock::now() - last_activity > kDrainIdle) break;
     }
-    if (!wait_for(self.socket.fd(), POLLIN, 10)) continue;
+    if (!wait_for(self.socket->fd(), POLLIN, 10)) continue;
     std::size_t size = 0;
-    while (self.socket.receive(in, size, from) == lio::UdpStatus::ok) {
+    while (self.socket->receive(in, size, from) == lio::UdpStatus::ok) {
       const auto now = Clock::now();
       if (tally.first == Clock::time_point{}) tally.first = now;
       tally.last = last_activity = now;

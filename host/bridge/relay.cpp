@@ -47,10 +47,12 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     return false;
   }
   peer_ = *peer;
-  if (!udp_.open(*local)) {
-    error = udp_.error_text();
+  auto udp = platform::UdpSocket::open(*local);
+  if (!udp) {
+    error = udp.error().message;
     return false;
   }
+  udp_.emplace(std::move(udp).value());
   platform::SocketCanConfig can_config;
   can_config.interface = config.can_interface;
   auto can = platform::SocketCan::open(can_config);
@@ -99,7 +101,7 @@ bool Relay::send(Datagram& d) {
   std::array<std::uint8_t, kMaxDatagramSize> buffer;
   const auto encoded = encode(d, key_, buffer);
   if (!encoded) return false;  // cannot happen for frames we built; counted by the caller as a send failure
-  if (udp_.send_to(std::span(buffer.data(), encoded.size), peer_) != platform::UdpStatus::ok) {
+  if (udp_->send_to(std::span(buffer.data(), encoded.size), peer_) != platform::UdpStatus::ok) {
     ++counters_.send_failures;
     return false;
   }
@@ -141,7 +143,7 @@ void Relay::relay_network_to_can() {
   for (int i = 0; i < kMaxDatagramsPerWakeup; ++i) {
     std::size_t size = 0;
     platform::SocketAddress from;
-    if (udp_.receive(buffer, size, from) != platform::UdpStatus::ok) return;
+    if (udp_->receive(buffer, size, from) != platform::UdpStatus::ok) return;
     const std::int64_t arrival = steady_us();
     if (!(from == peer_)) {
       ++counters_.foreign_source;  // not even worth a HMAC
@@ -321,7 +323,7 @@ int Relay::run() {
   while (true) {
     pollfd fds[4] = {{signal_fd_.get(), POLLIN, 0},
                      {timer_fd_.get(), POLLIN, 0},
-                     {udp_.fd(), POLLIN, 0},
+                     {udp_->fd(), POLLIN, 0},
                      {can_down_ ? -1 : can_->fd(), POLLIN, 0}};
     if (::poll(fds, 4, -1) < 0) {
       if (errno == EINTR) continue;
@@ -331,7 +333,7 @@ int Relay::run() {
     if (fds[0].revents & POLLIN) break;  // SIGINT or SIGTERM
     if (fds[3].revents & (POLLIN | POLLERR)) relay_can_to_network();
     if (fds[2].revents & POLLIN) relay_network_to_can();
-    if (fds[2].revents & POLLERR) counters_.peer_unreachable += static_cast<std::uint64_t>(udp_.drain_errors());
+    if (fds[2].revents & POLLERR) counters_.peer_unreachable += static_cast<std::uint64_t>(udp_->drain_errors());
     if (fds[1].revents & POLLIN) on_timer();
   }
   if (config_.stats_json) print_stats(static_cast<double>(steady_us() - last_stats_us_) * 1e-6);

@@ -38,7 +38,7 @@ class Relay {
   Key key_{};
   std::uint8_t site_id_ = 0;
   std::optional<platform::SocketCan> can_;  // opened by start()
-  platform::UdpSocket udp_;
+  std::optional<platform::UdpSocket> udp_;  // opened by start()
   platform::SocketAddress peer_;
   platform::UniqueFd signal_fd_, timer_fd_;
   std::unique_ptr<CandumpRecorder> recorder_;

@@ -96,27 +96,24 @@ UdpStatus UdpSocket::fail(int err) {
   }
 }
 
-bool UdpSocket::open(const SocketAddress& local) {
-  fd_.reset(::socket(local.family(), SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
-  if (!fd_) {
-    fail(errno);
-    error_ = "socket: " + error_;
-    return false;
+Result<UdpSocket> UdpSocket::open(const SocketAddress& local) {
+  UniqueFd fd(::socket(local.family(), SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!fd) {
+    const int err = errno;
+    return Error{std::string("socket: ") + std::strerror(err), err};
   }
   // Without IP_RECVERR an unconnected socket never learns that its peer is unreachable.
   const int on = 1;
   if (local.family() == AF_INET6) {
-    ::setsockopt(fd_.get(), IPPROTO_IPV6, IPV6_RECVERR, &on, sizeof on);
+    ::setsockopt(fd.get(), IPPROTO_IPV6, IPV6_RECVERR, &on, sizeof on);
   } else {
-    ::setsockopt(fd_.get(), IPPROTO_IP, IP_RECVERR, &on, sizeof on);
+    ::setsockopt(fd.get(), IPPROTO_IP, IP_RECVERR, &on, sizeof on);
   }
-  if (::bind(fd_.get(), local.get(), local.length) < 0) {
-    fail(errno);
-    error_ = "bind " + local.to_string() + ": " + error_;
-    fd_.reset();
-    return false;
+  if (::bind(fd.get(), local.get(), local.length) < 0) {
+    const int err = errno;
+    return Error{"bind " + local.to_string() + ": " + std::strerror(err), err};
   }
-  return true;
+  return UdpSocket(std::move(fd));
 }
 
 UdpStatus UdpSocket::send_to(std::span<const std::uint8_t> data, const SocketAddress& to) {

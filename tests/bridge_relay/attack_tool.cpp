@@ -52,11 +52,12 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", error);
     return 2;
   }
-  platform::UdpSocket socket;
-  if (!socket.open(*local)) {
-    fmt::print(stderr, "lever-bridge-attack: {}\n", socket.error_text());
+  auto opened = platform::UdpSocket::open(*local);
+  if (!opened) {
+    fmt::print(stderr, "lever-bridge-attack: {}\n", opened.error().message);
     return 1;
   }
+  auto& socket = opened.value();
   const Key key = load_key_file(key_file);
   const Key wrong = generate_key();
 

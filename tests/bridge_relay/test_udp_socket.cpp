@@ -4,6 +4,7 @@
 
 #include <array>
 #include <catch2/catch.hpp>
+#include <cerrno>
 #include <cstring>
 
 #include "lever/platform/udp_socket.hpp"
@@ -54,12 +55,15 @@ TEST_CASE("socket addresses: IPv4, IPv6 in brackets, names; mistakes named", "[b
 TEST_CASE("datagrams cross loopback with the sender's address, IPv4 and IPv6", "[bridge][udp]") {
   for (const char* local : {"127.0.0.1:0", "[::1]:0"}) {
     INFO(local);
-    UdpSocket a, b;
-    if (!a.open(address(local))) {
-      WARN("no " << local << " here: " << a.error_text());
+    auto opened_a = UdpSocket::open(address(local));
+    if (!opened_a) {
+      WARN("no " << local << " here: " << opened_a.error().message);
       continue;
     }
-    REQUIRE(b.open(address(local)));
+    auto opened_b = UdpSocket::open(address(local));
+    REQUIRE(opened_b.ok());
+    auto& a = opened_a.value();
+    auto& b = opened_b.value();
     const std::array<std::uint8_t, 3> payload{1, 2, 3};
     REQUIRE(a.send_to(payload, bound(b)) == UdpStatus::ok);
     REQUIRE(wait_readable(b.fd()));
@@ -73,9 +77,11 @@ TEST_CASE("datagrams cross loopback with the sender's address, IPv4 and IPv6", "
 }
 
 TEST_CASE("a datagram larger than the buffer reports its real size", "[bridge][udp]") {
-  UdpSocket a, b;
-  REQUIRE(a.open(address("127.0.0.1:0")));
-  REQUIRE(b.open(address("127.0.0.1:0")));
+  auto opened_a = UdpSocket::open(address("127.0.0.1:0"));
+  auto opened_b = UdpSocket::open(address("127.0.0.1:0"));
+  REQUIRE((opened_a.ok() && opened_b.ok()));
+  auto& a = opened_a.value();
+  auto& b = opened_b.value();
   std::array<std::uint8_t, 1000> big{};
   REQUIRE(a.send_to(big, bound(b)) == UdpStatus::ok);
   REQUIRE(wait_readable(b.fd()));
@@ -86,12 +92,27 @@ TEST_CASE("a datagram larger than the buffer reports its real size", "[bridge][u
   CHECK(size == 1000u);
 }
 
+TEST_CASE("a socket that cannot bind does not exist: the error names the address and the reason", "[bridge][udp]") {
+  auto first = UdpSocket::open(address("127.0.0.1:0"));
+  REQUIRE(first.ok());
+  const auto taken = bound(first.value());
+  const auto second = UdpSocket::open(taken);
+  REQUIRE_FALSE(second.ok());
+  CHECK_THAT(second.error().message, Catch::Contains("bind " + taken.to_string()));
+  CHECK_THAT(second.error().message, Catch::Contains("in use"));
+  CHECK(second.error().errno_value == EADDRINUSE);
+}
+
 TEST_CASE("sending to a closed port comes back as an ICMP error on the error queue", "[bridge][udp]") {
-  UdpSocket a, closed;
-  REQUIRE(a.open(address("127.0.0.1:0")));
-  REQUIRE(closed.open(address("127.0.0.1:0")));
-  const SocketAddress gone = bound(closed);
-  closed = UdpSocket();  // the port closes
+  auto opened_a = UdpSocket::open(address("127.0.0.1:0"));
+  REQUIRE(opened_a.ok());
+  auto& a = opened_a.value();
+  SocketAddress gone;
+  {
+    auto closed = UdpSocket::open(address("127.0.0.1:0"));
+    REQUIRE(closed.ok());
+    gone = bound(closed.value());
+  }  // the port closes
   const std::array<std::uint8_t, 1> byte{0};
   a.send_to(byte, gone);
   REQUIRE(wait_readable(a.fd(), POLLERR));

@@ -8,7 +8,9 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
+#include "lever/platform/result.hpp"
 #include "lever/platform/unique_fd.hpp"
 
 namespace lever::platform {
@@ -31,7 +33,13 @@ enum class UdpStatus : std::uint8_t { ok, would_block, unreachable, error };
 
 class UdpSocket {
  public:
-  bool open(const SocketAddress& local);
+  // A socket bound to `local`, or why not (naming the call and the address). No half-open sockets.
+  static Result<UdpSocket> open(const SocketAddress& local);
+  UdpSocket(UdpSocket&&) noexcept = default;
+  UdpSocket& operator=(UdpSocket&&) noexcept = default;
+  UdpSocket(const UdpSocket&) = delete;
+  UdpSocket& operator=(const UdpSocket&) = delete;
+
   int fd() const noexcept { return fd_.get(); }
   const std::string& error_text() const noexcept { return error_; }
   int last_errno() const noexcept { return errno_; }
@@ -44,6 +52,7 @@ class UdpSocket {
   int drain_errors();
 
  private:
+  explicit UdpSocket(UniqueFd fd) noexcept : fd_(std::move(fd)) {}
   UdpStatus fail(int err);
   UniqueFd fd_;
   int errno_ = 0;
