@@ -8,6 +8,7 @@
 #include <stop_token>
 #include <thread>
 
+#include "lever/app/gauge_port.hpp"
 #include "lever/app/stats_line.hpp"
 #include "lever/fw/lever.hpp"
 #include "lever/platform/board_can_port.hpp"
@@ -22,24 +23,6 @@ namespace lever::app {
 namespace {
 
 constexpr int kRuntimeFailure = 1;
-
-// The strain gauge as the core's ForcePort: the Modbus thread's newest sample, stamped on the firmware's
-// clock by its age at this step (the loop sets `now` before each step). A lever that does not read its
-// gauge has none.
-struct GaugePort {
-  const platform::ModbusGauge* gauge = nullptr;
-  fw::Tick now_tick = 0;
-  std::int64_t now_ns = 0;
-  std::optional<fw::ForceReading> latest() const noexcept {
-    if (gauge == nullptr) return std::nullopt;
-    const auto s = gauge->latest();
-    if (!s) return std::nullopt;
-    const std::int64_t age_ticks = s->monotonic_ns >= now_ns ? 0 : (now_ns - s->monotonic_ns) / 1'000'000;
-    const fw::Tick tick =
-        static_cast<fw::Tick>(age_ticks) >= now_tick ? 0 : now_tick - static_cast<fw::Tick>(age_ticks);
-    return fw::ForceReading{s->newtons, tick, false, s->saturated};
-  }
-};
 
 struct BoardHal {
   platform::GpioEncoder encoder_;
