@@ -122,8 +122,8 @@ int run() {
     top.step(now);
   }
   const bool armed = hsi.supervisor().armed() && top.supervisor().armed();
-  const bool both_ways = hsi.counters().data_sent > 0 && top.counters().data_sent > 0 &&
-                         hsi.counters().rx_frames > 0 && top.counters().rx_frames > 0;
+  const bool both_ways = hsi.counters().data_sent > 0 && top.counters().data_sent > 0 && hsi.counters().rx_frames > 0 &&
+                         top.counters().rx_frames > 0;
   const bool followed = std::fabs(top_plant.angle - 0.2) < 0.05;
   mcu::write("lever-mcu: ");
   mcu::write_number(kTicks);

@@ -16,10 +16,22 @@ using Handler = void (*)();
 }
 
 // Initial stack pointer, reset, and every fault to one handler that stops (the smoke test then times out).
-__attribute__((section(".vectors"), used)) const Handler vectors[16] = {
-    reinterpret_cast<Handler>(&__stack_top), reset_handler, fault_handler, fault_handler, fault_handler,
-    fault_handler, fault_handler, nullptr, nullptr, nullptr, nullptr, fault_handler, fault_handler, nullptr,
-    fault_handler, fault_handler};
+__attribute__((section(".vectors"), used)) const Handler vectors[16] = {reinterpret_cast<Handler>(&__stack_top),
+                                                                        reset_handler,
+                                                                        fault_handler,
+                                                                        fault_handler,
+                                                                        fault_handler,
+                                                                        fault_handler,
+                                                                        fault_handler,
+                                                                        nullptr,
+                                                                        nullptr,
+                                                                        nullptr,
+                                                                        nullptr,
+                                                                        fault_handler,
+                                                                        fault_handler,
+                                                                        nullptr,
+                                                                        fault_handler,
+                                                                        fault_handler};
 
 extern "C" void reset_handler() {
   for (std::uint32_t *src = &__data_load, *dst = &__data_start; dst < &__data_end;) *dst++ = *src++;
