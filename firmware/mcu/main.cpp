@@ -59,16 +59,7 @@ struct Can {
   bool send(const protocol::CanFrame& f) { return tx->push(f); }
 };
 
-struct Hal {
-  Encoder encoder_;
-  Force force_;
-  Motor motor_;
-  Can can_;
-  Encoder& encoder() { return encoder_; }
-  Force& force() { return force_; }
-  Motor& motor() { return motor_; }
-  Can& can() { return can_; }
-};
+using Hal = fw::Ports<Encoder, Force, Motor, Can>;
 static_assert(fw::LeverHal<Hal>);
 
 // Registers: plain memory on QEMU, peripherals on a board.

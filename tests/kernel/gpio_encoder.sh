@@ -5,16 +5,8 @@
 # usage: gpio_encoder.sh BIN_DIR
 set -uo pipefail
 bin=$1
-rig=$(cd "$(dirname "$0")/../../tools/kernel-rig" && pwd)
+source "$(dirname "$0")/gpio_sim_lib.sh"
 
-chip_dev=$("$rig/gpio-sim-chip" enc enc-a enc-b enc-z) || exit 1
-read -r chip dev <<<"$chip_dev"
-info=$(gpioinfo "$chip")
-echo "$info"
-for name in enc-a enc-b enc-z; do
-  grep -q "\"$name\" *unused *input" <<<"$info" || { echo "FAILED: gpioinfo shows no free input \"$name\"" >&2; exit 1; }
-done
-
-export LEVER_GPIO_CHIP=$chip LEVER_GPIO_LABEL=enc LEVER_GPIO_SYSFS=/sys/devices/platform/$dev/$chip
+sim_chip enc enc-a enc-b enc-z || exit 1
 export LEVER_GPIO_GEN=$bin/lever-gpio-quadrature-gen
 "$bin/lever_tests_gpio_sim" --durations yes

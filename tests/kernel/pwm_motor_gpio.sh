@@ -5,15 +5,7 @@
 # usage: pwm_motor_gpio.sh BIN_DIR
 set -uo pipefail
 bin=$1
-rig=$(cd "$(dirname "$0")/../../tools/kernel-rig" && pwd)
+source "$(dirname "$0")/gpio_sim_lib.sh"
 
-chip_dev=$("$rig/gpio-sim-chip" motor mot-en mot-dir mot-fault) || exit 1
-read -r chip dev <<<"$chip_dev"
-info=$(gpioinfo "$chip")
-echo "$info"
-for name in mot-en mot-dir mot-fault; do
-  grep -q "\"$name\" *unused" <<<"$info" || { echo "FAILED: gpioinfo shows no free line \"$name\"" >&2; exit 1; }
-done
-
-export LEVER_GPIO_CHIP=$chip LEVER_GPIO_LABEL=motor LEVER_GPIO_SYSFS=/sys/devices/platform/$dev/$chip
+sim_chip motor mot-en mot-dir mot-fault || exit 1
 "$bin/lever_tests_motor_gpio_sim" --durations yes

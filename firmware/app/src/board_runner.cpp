@@ -24,15 +24,7 @@ namespace {
 
 constexpr int kRuntimeFailure = 1;
 
-struct BoardHal {
-  platform::GpioEncoder encoder_;
-  GaugePort force_;
-  platform::PwmMotor motor_;
-  platform::BoardCanPort can_;
-  platform::GpioEncoder& encoder() { return encoder_; }
-  GaugePort& force() { return force_; }
-  platform::PwmMotor& motor() { return motor_; }
-  platform::BoardCanPort& can() { return can_; }
+struct BoardHal : fw::Ports<platform::GpioEncoder, GaugePort, platform::PwmMotor, platform::BoardCanPort> {
   std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::RealtimeLoop::monotonic_ns()); }
 };
 static_assert(fw::LeverHal<BoardHal>);
@@ -149,7 +141,7 @@ int run_board(const FwConfig& config, bool json_lines, const std::atomic<bool>& 
   }
   auto can = opened(platform::BoardCanPort::open(can_config(config)), "CAN port");
   if (!can) return kRuntimeFailure;
-  BoardHal hal{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)};
+  BoardHal hal{{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)}};
   fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",
              config.lever.role == protocol::Role::hsi ? "HSI" : "TOP", config.lever.pair, config.board.can_interface,
              hal.encoder_.description(), hal.motor_.description());

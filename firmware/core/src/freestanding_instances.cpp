@@ -26,16 +26,7 @@ struct Can {
 };
 
 template <typename Encoder>
-struct Hal {
-  Encoder encoder_;
-  Force force_;
-  Motor motor_;
-  Can can_;
-  Encoder& encoder() { return encoder_; }
-  Force& force() { return force_; }
-  Motor& motor() { return motor_; }
-  Can& can() { return can_; }
-};
+using Hal = Ports<Encoder, Force, Motor, Can>;
 
 }  // namespace lever::fw::freestanding
 

@@ -122,6 +122,20 @@ template <typename H>
 concept LeverHal =
     HasPorts<H> && EncoderPort<EncoderOf<H>> && ForcePort<ForceOf<H>> && MotorPort<MotorOf<H>> && CanPort<CanOf<H>>;
 
+// A board made of one port of each kind, for the simple cases (a stand-in HAL, a board runner): the ports are
+// its members, aggregate-initialized in this order.
+template <typename E, typename F, typename M, typename C>
+struct Ports {
+  E encoder_;
+  F force_;
+  M motor_;
+  C can_;
+  E& encoder() { return encoder_; }
+  F& force() { return force_; }
+  M& motor() { return motor_; }
+  C& can() { return can_; }
+};
+
 // Optional: a monotonic nanosecond clock, with which the core measures how long each step() takes. Boards
 // have one; the HIL's simulated time has none worth measuring.
 template <typename H>
