@@ -70,7 +70,6 @@ class ConfigSchema {
   // The effective configuration as a TOML document, every key with its unit and documentation.
   std::string print() const;
 
-
  private:
   struct Field {
     std::string key, unit, doc;
