@@ -7,6 +7,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/hil/can_bus.hpp"
+#include "lever/hil/world.hpp"
 
 namespace lever::hil {
 namespace {
@@ -15,17 +16,16 @@ constexpr Nanos kTick = 1'000'000;
 constexpr fw::Tick kHostPeriod = 100;       // the host looks at the levers every 100 ms
 constexpr fw::Tick kPowerUpLimit = 30'000;  // homing and arming must be done by then
 
-// One lever with its plant and hardware, at one site. The firmware can be rebooted: it is rebuilt from its
+// One lever's controller and hardware, at one site (its mechanics are in the World). The firmware can be rebooted: it is rebuilt from its
 // power-up state on the same hardware, with its own tick counting from 1 again.
 template <typename LeverT>
 struct LeverSite {
-  LeverSite(const LeverPlantParams& plant_params, const fw::LeverConfig& fw_config, double angle,
-            const StrainGaugeParams& gauge, std::uint64_t seed, CanBus& bus, const Nanos& now)
-      : plant(plant_params, angle), hal(fw_config.counts_per_rev, angle, gauge, seed), config(fw_config) {
+  LeverSite(const fw::LeverConfig& fw_config, double angle, const StrainGaugeParams& gauge, std::uint64_t seed,
+            CanBus& bus, const Nanos& now)
+      : hal(fw_config.counts_per_rev, angle, gauge, seed), config(fw_config) {
     hal.can_ = {&bus, bus.add_node(), &now};
     boot(1);
   }
-  LeverPlant plant;
   SimHal hal;
   fw::LeverConfig config;
   std::optional<LeverT> lever;
@@ -149,18 +149,15 @@ SimResult run_simulation(const SimConfig& config) {
     top_fw.homing.method = fw::HomingMethod::absolute;
   }
   // Levers live at a fixed address: the core holds a reference to its HAL.
-  auto hsi = std::make_unique<LeverSite<SimHsi>>(config.hsi_plant, hsi_fw, hsi_angle, config.gauge, config.seed * 4 + 3,
-                                                 hsi_bus, now);
-  auto top = std::make_unique<LeverSite<SimTop>>(config.top_plant, top_fw, top_angle, config.gauge, config.seed * 4 + 4,
-                                                 top_bus, now);
+  auto hsi = std::make_unique<LeverSite<SimHsi>>(hsi_fw, hsi_angle, config.gauge, config.seed * 4 + 3, hsi_bus, now);
+  auto top = std::make_unique<LeverSite<SimTop>>(top_fw, top_angle, config.gauge, config.seed * 4 + 4, top_bus, now);
+  World world({config.scenario, config.hsi_plant, config.top_plant, config.wall, config.operator_params,
+               config.substeps, config.seed * 4 + 5},
+              hsi_angle, top_angle);
   const auto host = hsi_bus.add_node();  // the operator console at the HSI's site
   const Nanos latency = static_cast<Nanos>(config.bridge_latency_us * 1e3);
   Bridge bridge_hsi{&hsi_bus, hsi_bus.add_node(), &to_top, &to_hsi, latency};
   Bridge bridge_top{&top_bus, top_bus.add_node(), &to_hsi, &to_top, latency};
-
-  // The operator takes the handle once both levers are armed, wherever the HSI then is.
-  std::optional<HumanOperator> op;
-  bool hand_was_on = false;
 
   auto send_command = [&](protocol::Opcode opcode, bool to_hsi_lever, bool to_top_lever) {
     if (!to_hsi_lever && !to_top_lever) return;
@@ -189,9 +186,7 @@ SimResult run_simulation(const SimConfig& config) {
   SimResult result;
   for (const auto& f : config.faults) result.faults.push_back({f, {}, {}});
   std::vector<bool> rebooted(config.faults.size(), false);
-  const double top_arm = top_fw.display.lever_arm_m;
   const auto scenario_ticks = static_cast<fw::Tick>(std::llround(config.duration_s * 1000.0));
-  const double dt = 1e-3 / config.substeps;
   double sq_position = 0, sq_force = 0, contact_force_sum = 0;
   std::uint64_t violations = 0, contact_ticks = 0;
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
@@ -203,21 +198,16 @@ SimResult run_simulation(const SimConfig& config) {
     const bool scenario = start != 0;
     const double t = scenario ? static_cast<double>(tick - start) * 1e-3 : -1e-3;
     now = static_cast<Nanos>(tick) * kTick;
-    const bool hand_on = op.has_value() && hsi->lever->supervisor().state() != fw::LeverState::homing;
-    if (hand_on && !hand_was_on && scenario) op->grab_at(tick - start, hsi->plant.angle());
-    hand_was_on = hand_on;
+    // The operator takes the handle once both levers are armed, and lets go while the HSI homes.
+    world.set_hand_on(hsi->lever->supervisor().state() != fw::LeverState::homing, tick);
 
     // Physics over the last millisecond, with the motor commands of the last step.
-    for (int s = 0; s < config.substeps; ++s) {
-      const double hand_torque = hand_on ? op->torque(hsi->plant.angle(), hsi->plant.speed()) : 0.0;
-      hsi->plant.advance(hsi->hal.motor_.last.torque_nm, hsi->hal.motor_.last.enable, hand_torque, dt);
-      top->plant.advance(top->hal.motor_.last.torque_nm, top->hal.motor_.last.enable,
-                         wall_torque(config.wall, top->plant.angle(), top->plant.speed()), dt);
-      hsi->hal.encoder_.track(hsi->plant.angle());
-      top->hal.encoder_.track(top->plant.angle());
-    }
-    const double contact = -wall_torque(config.wall, top->plant.angle(), top->plant.speed()) / top_arm;
-    const double hand = hand_on ? op->hand_force(hsi->plant.angle(), hsi->plant.speed()) : 0.0;
+    world.advance(hsi->hal.motor_.last, top->hal.motor_.last, [&] {
+      hsi->hal.encoder_.track(world.hsi().angle());
+      top->hal.encoder_.track(world.top().angle());
+    });
+    const double contact = world.contact_force();
+    const double hand = world.hand_force();
 
     // Faults in force during this tick (scenario time).
     bool any_fault_active = false;
@@ -306,7 +296,7 @@ SimResult run_simulation(const SimConfig& config) {
       manage_levers();
     }
 
-    if (op) op->update(tick - start, hand);
+    world.update_operator(tick, hand);
     hsi->step(tick);
     top->step(tick);
 
@@ -317,14 +307,11 @@ SimResult run_simulation(const SimConfig& config) {
       if (both_armed) {
         start = tick;
         result.homed_at_s = static_cast<double>(tick) * 1e-3;
-        op.emplace(config.operator_params, config.scenario, config.wall.angle, hsi->plant.angle(), config.seed * 4 + 5);
-        hsi->plant.set_added_inertia(config.operator_params.hand_inertia);
+        world.start_operator(tick);
       }
       if (config.observer) config.observer({t, tick, hl, tl, hsi->rearms_sent, top->rearms_sent});
       continue;
     }
-    hsi->plant.set_added_inertia(hand_on ? config.operator_params.hand_inertia : 0.0);
-
     // Measurements.
     const auto& ht = hl.telemetry();
     const auto& tt = tl.telemetry();
@@ -335,7 +322,7 @@ SimResult run_simulation(const SimConfig& config) {
       result.motion_frames += ht.sent_data;
       result.force_frames += tt.sent_data;
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
-      const double dp = top->plant.angle() - hsi->plant.angle();
+      const double dp = world.top().angle() - world.hsi().angle();
       sq_position += dp * dp;
       const double df = displayed - measured;
       sq_force += df * df;
@@ -357,7 +344,7 @@ SimResult run_simulation(const SimConfig& config) {
       r.top.armed_without_rearm = r.top.armed_without_rearm || top_bad;
     }
     if (config.record_trace) {
-      result.trace.push_back({t, hsi->plant.angle(), top->plant.angle(), ht.velocity_rad_s, tt.position_ref_rad,
+      result.trace.push_back({t, world.hsi().angle(), world.top().angle(), ht.velocity_rad_s, tt.position_ref_rad,
                               contact, measured, displayed, hsi->torque(), top->torque(), hand, ht.sent_data,
                               tt.sent_data, static_cast<int>(hl.supervisor().state()),
                               static_cast<int>(tl.supervisor().state())});

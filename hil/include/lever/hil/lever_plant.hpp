@@ -7,6 +7,7 @@ namespace lever::hil {
 
 struct LeverPlantParams {
   double inertia = 2.0e-3;            // kg m^2: rotor, 10 cm lever and handle
+  double radius = 0.1;                // m: pivot to the handle (HSI) or to the tip that meets the wall (TOP)
   double viscous = 0.01;              // N m s/rad
   double coulomb = 0.01;              // N m, bearing and brush friction
   double coulomb_speed = 0.02;        // rad/s: below this the Coulomb term fades in smoothly (no chattering)
