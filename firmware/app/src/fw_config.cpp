@@ -19,6 +19,12 @@ void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<doubl
 
 }  // namespace
 
+fw::LeverConfig board_lever_defaults() {
+  fw::LeverConfig c;
+  c.gauge.newton_per_count = 1.0;
+  return c;
+}
+
 platform::GpioEncoderConfig encoder_config(const BoardConfig& b) {
   platform::GpioEncoderConfig c;
   c.chip = b.encoder_chip;

@@ -33,7 +33,11 @@ int run_sim(const app::FwConfig& config, double duration_s, bool stats_json, boo
   hil::SimConfig sim;
   sim.duration_s = duration_s;
   const bool hsi = config.lever.role == protocol::Role::hsi;
-  (hsi ? sim.hsi_firmware : sim.top_firmware) = config.lever;
+  auto& simulated = hsi ? sim.hsi_firmware : sim.top_firmware;
+  simulated = config.lever;
+  // The simulated gauge is the HIL's ADC, not the board's Modbus amplifier (which reports newtons): it keeps
+  // the calibration the HIL's gauge model is made for.
+  simulated.gauge = hil::SimConfig::default_firmware(config.lever.role).gauge;
   sim.velocity_codec = (hsi ? config.lever : sim.hsi_firmware).motion_codec;
   sim.force_codec = (hsi ? sim.top_firmware : config.lever).force_codec;
   const auto wall_start = std::chrono::steady_clock::now();

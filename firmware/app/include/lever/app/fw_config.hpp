@@ -63,8 +63,12 @@ platform::ModbusGaugeConfig gauge_config(const BoardConfig& board);
 platform::PwmMotorConfig motor_config(const BoardConfig& board);
 platform::RealtimeConfig realtime_config(const BoardConfig& board);
 
+// The core's defaults, but for a board: the Modbus gauge already reports newtons (its register map scales
+// the amplifier's units), so the core's own gauge calibration is the identity.
+fw::LeverConfig board_lever_defaults();
+
 struct FwConfig {
-  fw::LeverConfig lever{};
+  fw::LeverConfig lever = board_lever_defaults();
   BoardConfig board{};
 };
 
