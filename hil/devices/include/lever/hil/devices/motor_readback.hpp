@@ -1,0 +1,61 @@
+#pragma once
+// The motor driver as the simulated world sees it: what the board's program (platform::PwmMotor, from the same
+// PwmMotorConfig) drives, read back as a torque. The PWM side is a sysfs tree of regular files under the
+// config's sysfs_root, which this makes and PwmMotor writes unchanged; the enable, direction and fault lines
+// are lines of a gpio-sim chip, whose sysfs attributes show what PwmMotor drives and let the world drive the
+// fault input.
+//
+// Without lines in the config no gpio-sim is needed (a host test, a PWM bring-up config).
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "lever/platform/pwm_motor_config.hpp"
+#include "lever/platform/result.hpp"
+
+namespace lever::hil::devices {
+
+struct MotorReading {
+  // The driver's torque: duty * full_scale_current_a * torque_constant_nm_per_a * gear_ratio (the inverse of
+  // platform's TorqueToDuty), negative when the direction line is asserted; 0 unless `enabled`.
+  double torque_nm = 0.0;
+  bool enabled = false;   // PWM enable is 1, and the enable line is asserted (when one is configured)
+  double duty = 0.0;      // the fraction of the period the driver sees: duty_cycle / period, 1 - that when the
+                          // polarity written differs from the board's inversion (pwm_inversed); 0 at period 0
+  bool negative = false;  // the direction line asserted (false without one)
+};
+
+class MotorReadback {
+ public:
+  // Validates the config as PwmMotor does; refuses a sysfs_root that is /sys or under it; makes the PWM tree
+  // (make_fake_pwm_channel: what exists is kept, what is missing made disabled); finds the lines on their
+  // gpio-sim chips; sets the enable and direction lines' pulls to deasserted (the board's resistors: the level
+  // they show while no program drives them, and again after one dies, as gpio-sim frees a line to its pull)
+  // and drives the fault input deasserted. Fails naming the file or field and the reason.
+  static platform::Result<MotorReadback> open(const platform::PwmMotorConfig& config);
+
+  MotorReadback(MotorReadback&&) noexcept;
+  MotorReadback& operator=(MotorReadback&&) noexcept;
+  MotorReadback(const MotorReadback&) = delete;
+  MotorReadback& operator=(const MotorReadback&) = delete;
+  ~MotorReadback();
+
+  // One pread per attribute and line, on files held open; no allocation. The world calls it every tick. A value
+  // that cannot be read or parsed (counted in read_errors()) is taken as last read.
+  MotorReading read() noexcept;
+
+  // Asserts (or releases) the driver's fault output: drives the fault line to its asserted level (respecting
+  // active_low). False when there is no fault line or the write failed.
+  bool set_fault(bool asserted) noexcept;
+
+  std::uint64_t read_errors() const noexcept;
+  // "pwmchip0/pwm1 under /tmp/hil/top-sys, enable_line gpiochip1 [motor] 0, ..."
+  const std::string& description() const noexcept;
+
+ private:
+  struct Impl;
+  explicit MotorReadback(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lever::hil::devices

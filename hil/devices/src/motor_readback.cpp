@@ -1,0 +1,202 @@
+#include "lever/hil/devices/motor_readback.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <optional>
+#include <string_view>
+
+#include "fake_pwm_tree.hpp"
+#include "lever/platform/unique_fd.hpp"
+#include "sim_line.hpp"
+
+namespace lever::hil::devices {
+
+namespace {
+
+using platform::Error;
+using platform::UniqueFd;
+
+// A regular file rewritten by pwrite at offset 0 keeps the tail of a longer old value ("0\n000\n"): every
+// value ends in a newline, so the value is the first line.
+std::optional<std::string_view> first_line(int fd, char (&buffer)[32]) noexcept {
+  const ssize_t got = ::pread(fd, buffer, sizeof buffer, 0);
+  if (got <= 0) return std::nullopt;
+  const std::string_view text(buffer, static_cast<std::size_t>(got));
+  const auto end = text.find('\n');
+  if (end == std::string_view::npos) return std::nullopt;  // nothing written yet, or cut off mid-write
+  return text.substr(0, end);
+}
+
+std::optional<std::uint64_t> read_unsigned(int fd) noexcept {
+  char buffer[32];
+  const auto line = first_line(fd, buffer);
+  if (!line || line->empty()) return std::nullopt;
+  std::uint64_t value = 0;
+  const auto [end, ec] = std::from_chars(line->data(), line->data() + line->size(), value);
+  if (ec != std::errc{} || end != line->data() + line->size()) return std::nullopt;
+  return value;
+}
+
+std::optional<bool> read_inversed(int fd) noexcept {
+  char buffer[32];
+  const auto line = first_line(fd, buffer);
+  if (!line) return std::nullopt;
+  if (*line == "inversed") return true;
+  if (*line == "normal") return false;
+  return std::nullopt;
+}
+
+struct Line {
+  SimLine sim;
+  bool active_low = false;
+  bool asserted_is_high() const noexcept { return !active_low; }
+};
+
+platform::Result<Line> open_line(const platform::MotorLineConfig& config, const std::string& field) {
+  auto sim = SimLine::open(config.chip, config.line, "motor readback: " + field);
+  if (!sim) return sim.error();
+  return Line{std::move(sim).value(), config.active_low};
+}
+
+}  // namespace
+
+struct MotorReadback::Impl {
+  UniqueFd enable;
+  UniqueFd duty;
+  UniqueFd period;
+  UniqueFd polarity;
+  std::optional<Line> enable_line;
+  std::optional<Line> direction_line;
+  std::optional<Line> fault_line;
+  bool board_inverts = false;
+  double full_duty_nm = 0.0;
+  std::string description;
+
+  // As last read, for a read that fails.
+  std::uint64_t enable_value = 0;
+  std::uint64_t duty_ns = 0;
+  std::uint64_t period_ns = 0;
+  bool inversed = false;
+  bool enable_line_asserted = false;
+  bool direction_asserted = false;
+  std::uint64_t read_errors = 0;
+
+  void take(std::optional<std::uint64_t> read, std::uint64_t& into) noexcept {
+    if (read) {
+      into = *read;
+    } else {
+      ++read_errors;
+    }
+  }
+  void take(std::optional<bool> read, bool& into) noexcept {
+    if (read) {
+      into = *read;
+    } else {
+      ++read_errors;
+    }
+  }
+  void take_line(const std::optional<Line>& line, bool& asserted) noexcept {
+    if (!line) return;
+    const std::optional<bool> level = line->sim.level();
+    if (level) {
+      asserted = *level == line->asserted_is_high();
+    } else {
+      ++read_errors;
+    }
+  }
+};
+
+platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConfig& config) {
+  if (const auto problems = config.validate(); !problems.empty()) {
+    std::string message = "motor readback: ";
+    for (std::size_t i = 0; i < problems.size(); ++i) message += (i == 0 ? "" : "; ") + problems[i];
+    return Error{message, EINVAL};
+  }
+  auto tree = make_fake_pwm_channel(config.sysfs_root, config.pwm_chip, config.pwm_channel);
+  if (!tree) return tree.error();
+
+  auto impl = std::make_unique<Impl>();
+  const std::string& dir = tree.value().channel_dir;
+  struct Attribute {
+    const char* name;
+    UniqueFd* fd;
+  };
+  for (const Attribute& a : {Attribute{"enable", &impl->enable}, Attribute{"duty_cycle", &impl->duty},
+                             Attribute{"period", &impl->period}, Attribute{"polarity", &impl->polarity}}) {
+    a.fd->reset(::open((dir + "/" + a.name).c_str(), O_RDONLY | O_CLOEXEC));
+    if (!*a.fd) {
+      const int err = errno;
+      return Error{"motor readback: cannot open " + dir + "/" + a.name + ": " + std::strerror(err), err};
+    }
+  }
+  impl->description = "pwmchip" + std::to_string(config.pwm_chip) + "/pwm" + std::to_string(config.pwm_channel) +
+                      " under " + config.sysfs_root;
+
+  struct LineField {
+    const char* field;
+    const std::optional<platform::MotorLineConfig>& config;
+    std::optional<Line>& line;
+  };
+  for (const LineField& l : {LineField{"enable_line", config.enable_line, impl->enable_line},
+                             LineField{"direction_line", config.direction_line, impl->direction_line},
+                             LineField{"fault_line", config.fault_line, impl->fault_line}}) {
+    if (!l.config) continue;
+    auto opened = open_line(*l.config, l.field);
+    if (!opened) return opened.error();
+    l.line.emplace(std::move(opened).value());
+    // Deasserted: a resistor's level on the driver's inputs, and the fault output not reporting.
+    if (!l.line->sim.drive(!l.line->asserted_is_high())) {
+      const int err = errno;
+      return Error{std::string("motor readback: ") + l.field + " (" + l.line->sim.description() +
+                       "): cannot set its pull: " + std::strerror(err),
+                   err};
+    }
+    impl->description += std::string(", ") + l.field + " " + l.line->sim.description();
+  }
+  impl->board_inverts = config.pwm_inversed;
+  impl->full_duty_nm = config.gear_ratio * config.torque_constant_nm_per_a * config.full_scale_current_a;
+  return MotorReadback(std::move(impl));
+}
+
+MotorReadback::MotorReadback(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+MotorReadback::MotorReadback(MotorReadback&&) noexcept = default;
+MotorReadback& MotorReadback::operator=(MotorReadback&&) noexcept = default;
+MotorReadback::~MotorReadback() = default;
+
+MotorReading MotorReadback::read() noexcept {
+  Impl& s = *impl_;
+  s.take(read_unsigned(s.enable.get()), s.enable_value);
+  s.take(read_unsigned(s.duty.get()), s.duty_ns);
+  s.take(read_unsigned(s.period.get()), s.period_ns);
+  s.take(read_inversed(s.polarity.get()), s.inversed);
+  s.take_line(s.enable_line, s.enable_line_asserted);
+  s.take_line(s.direction_line, s.direction_asserted);
+
+  MotorReading r;
+  if (s.period_ns > 0) {
+    r.duty = std::min(static_cast<double>(s.duty_ns) / static_cast<double>(s.period_ns), 1.0);
+    // The board's inverter undoes the polarity PwmMotor writes for it; a mismatch shows as the complement.
+    if (s.inversed != s.board_inverts) r.duty = 1.0 - r.duty;
+  }
+  r.enabled = s.enable_value == 1 && (!s.enable_line || s.enable_line_asserted);
+  r.negative = s.direction_line && s.direction_asserted;
+  if (r.enabled) r.torque_nm = (r.negative ? -1.0 : 1.0) * r.duty * s.full_duty_nm;
+  return r;
+}
+
+bool MotorReadback::set_fault(bool asserted) noexcept {
+  if (!impl_->fault_line) return false;
+  Line& line = *impl_->fault_line;
+  return line.sim.drive(asserted == line.asserted_is_high());
+}
+
+std::uint64_t MotorReadback::read_errors() const noexcept { return impl_->read_errors; }
+
+const std::string& MotorReadback::description() const noexcept { return impl_->description; }
+
+}  // namespace lever::hil::devices
