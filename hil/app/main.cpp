@@ -1,6 +1,9 @@
-// lever-hil: the testbed in simulated time. `run` one scenario; `sweep` p for the paper's figures.
+// lever-hil: the testbed in simulated time. `run` one scenario; `sweep` p for the paper's figures; `serve` the
+// physical world on the wall clock to real lever-fw processes.
 #include <fmt/format.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -9,6 +12,7 @@
 
 #include "lever/cli/parse.hpp"
 #include "report.hpp"
+#include "serve.hpp"
 #include "sweep.hpp"
 
 namespace {
@@ -17,6 +21,9 @@ using namespace lever::hil;
 using lever::codec::Mode;
 
 constexpr int kBadInput = lever::cli::kBadInput;
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
 const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
                                                      {"free-motion", ScenarioKind::free_motion},
@@ -188,6 +195,36 @@ int main(int argc, char** argv) {
   sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
       ->default_str("30");
 
+  ServeOptions serve_options;
+  auto* serve = app.add_subcommand(
+      "serve",
+      "play the physical world on the wall clock for real lever-fw processes: encoder lines on gpio-sim, strain "
+      "gauges as Modbus servers, motors read back from the PWM sysfs tree, as the levers' configs wire them");
+  serve->add_option("--hsi-config", serve_options.hsi_config, "the HSI lever's lever-fw configuration")
+      ->required()
+      ->check(CLI::ExistingFile);
+  serve->add_option("--top-config", serve_options.top_config, "the TOP lever's lever-fw configuration")
+      ->required()
+      ->check(CLI::ExistingFile);
+  serve->add_option("--scenario", serve_options.scenario, "wall-tap (the paper's task), free-motion or press-hold")
+      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->default_str("wall-tap");
+  serve
+      ->add_option("--duration", serve_options.duration_s,
+                   "seconds of scenario once both levers are armed (0: until SIGINT or SIGTERM)")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->default_str("20");
+  serve->add_option("--arm-timeout", serve_options.arm_timeout_s, "seconds to wait for both levers to be armed")
+      ->check(CLI::Range(1.0, 86400.0))
+      ->default_str("300");
+  serve->add_option("--seed", serve_options.seed, "random seed (power-up angles, operator, gauge noise)")
+      ->default_str("1");
+  serve->add_option("--max-edge-rate", serve_options.max_edge_rate_hz, "encoder edges per second at most, per lever")
+      ->check(CLI::Range(100.0, 1e6))
+      ->default_str("20000");
+  serve->add_flag("--json", serve_options.json, "print the report as one JSON object");
+  serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns)");
+
   if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
 
   try {
@@ -201,6 +238,11 @@ int main(int argc, char** argv) {
         print_human(config, result);
       }
       return 0;
+    }
+    if (serve->parsed()) {
+      std::signal(SIGINT, on_stop_signal);
+      std::signal(SIGTERM, on_stop_signal);
+      return run_serve(serve_options, g_stop);
     }
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {

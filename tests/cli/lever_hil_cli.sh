@@ -47,4 +47,21 @@ for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png di
 done
 check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
 
+# serve, on a machine without the levers' devices: bad configurations are bad input, missing devices a
+# runtime failure naming the device; the end-to-end runs are in tests/kernel/lever_*.sh.
+printf '[lever]\nrole = "hsi"\n' >"$work/hsi.toml"
+printf '[lever]\nrole = "top"\n' >"$work/top.toml"
+printf '[lever]\nrole = "top"\npair = 3\n' >"$work/top3.toml"
+printf '[lever]\nrole = "hsi"\nspeed = 1\n' >"$work/bad.toml"
+"$hil" serve --help >"$work/help"; check "serve --help exits 0" test $? -eq 0
+check "serve --help names the configs" grep -q -- "--hsi-config" "$work/help"
+expect_bad "serve: two HSI configs" "must configure an HSI lever" serve --hsi-config "$work/hsi.toml" --top-config "$work/hsi.toml"
+expect_bad "serve: levers of different pairs" "different pairs" serve --hsi-config "$work/hsi.toml" --top-config "$work/top3.toml"
+expect_bad "serve: a config error names file and key" "lever.speed: unknown key" serve --hsi-config "$work/bad.toml" --top-config "$work/top.toml"
+expect_bad "serve: a missing config" "--hsi-config" serve --hsi-config "$work/none.toml" --top-config "$work/top.toml"
+printf '[lever]\nrole = "hsi"\n[board.encoder]\nchip = "/dev/no-such-chip"\n' >"$work/nochip.toml"
+timeout 20 "$hil" serve --hsi-config "$work/nochip.toml" --top-config "$work/top.toml" 2>"$work/err"; code=$?
+check "serve without the encoder's chip: exit 1 (got $code)" test "$code" -eq 1
+check "and names the lever, the encoder and the chip" grep -q "HSI encoder.*no-such-chip" "$work/err"
+
 report "lever-hil cli"
