@@ -36,6 +36,7 @@ bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, inde
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
 bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
 bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
+bad_config "a gauge staler than its polls" "gauge.stale_ms: must be longer than board.gauge.poll_us" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
 bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]\nfilter_hz = 800'
 "$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
 check "missing file: exit 2" test "$code" -eq 2

@@ -22,6 +22,9 @@ void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<doubl
 fw::LeverConfig board_lever_defaults() {
   fw::LeverConfig c;
   c.gauge.newton_per_count = 1.0;
+  // A reading is as old as the poll period (5 ms) plus the response (up to the 20 ms timeout): the core's
+  // 5 ms, right for an amplifier that pushes 600 samples a second, would call every other Modbus reading stale.
+  c.gauge.stale_after = 25;
   return c;
 }
 
@@ -276,6 +279,8 @@ LoadedConfig load_fw_config(const std::string& path) {
   if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
+  if (static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= out.config.board.gauge_poll_us)
+    return fail("gauge.stale_ms", "must be longer than board.gauge.poll_us, or readings go stale between polls");
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
   if (const auto problem = platform::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
