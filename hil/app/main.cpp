@@ -222,6 +222,8 @@ int main(int argc, char** argv) {
   serve->add_option("--max-edge-rate", serve_options.max_edge_rate_hz, "encoder edges per second at most, per lever")
       ->check(CLI::Range(100.0, 1e6))
       ->default_str("20000");
+  serve->add_flag("--hands-off", serve_options.hands_off,
+                  "the operator never takes the handle: the levers rest where their firmware puts them");
   serve->add_flag("--json", serve_options.json, "print the report as one JSON object");
   serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns)");
 

@@ -236,9 +236,9 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
       if (both_armed) {
         scenario_start = tick;
         result.homed_at_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-        world.start_operator(tick);
-        fmt::print(stderr, "lever-hil serve: both levers armed after {:.1f} s; the operator takes the handle\n",
-                   result.homed_at_s);
+        if (!o.hands_off) world.start_operator(tick);
+        fmt::print(stderr, "lever-hil serve: both levers armed after {:.1f} s; {}\n", result.homed_at_s,
+                   o.hands_off ? "hands off" : "the operator takes the handle");
       } else if (Clock::now() - wall_start > arm_timeout) {
         fmt::print(stderr, "lever-hil serve: the levers were not armed within {} s (HSI {}, TOP {})\n", o.arm_timeout_s,
                    state_name(hsi_watch), state_name(top_watch));

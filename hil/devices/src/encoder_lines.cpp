@@ -199,12 +199,15 @@ EncoderLines::~EncoderLines() = default;
 
 void EncoderLines::set_count(std::int64_t target) noexcept {
   Impl& s = *impl_;
-  s.target.store(target, std::memory_order_release);
+  const std::int64_t previous = s.target.exchange(target, std::memory_order_acq_rel);
   const std::int64_t behind = target - s.count.load(std::memory_order_relaxed);
   const auto backlog = static_cast<std::uint64_t>(behind < 0 ? -behind : behind);
   std::uint64_t seen = s.max_backlog.load(std::memory_order_relaxed);
   while (backlog > seen && !s.max_backlog.compare_exchange_weak(seen, backlog, std::memory_order_relaxed)) {
   }
+  // The world sets the count every millisecond and it mostly stays put: the thread is then idle at it or on
+  // its way there, and a wake-up per call would cost a futex call and a context switch each time for nothing.
+  if (previous == target) return;
   s.wake.fetch_add(1, std::memory_order_release);
   s.wake.notify_one();
 }

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Runs inside the kernel rig with gpio-sim (run-in-guest --gpio-sim): two sites. The HSI's lever-fw on vcan0, the
+# TOP's on vcan1 (its strain gauge on Modbus RTU over a pseudo-terminal), joined by two lever-bridges over UDP
+# on loopback, where the kernel's netem delays every datagram by 20 ms and loses 2 %. lever-hil serve plays
+# both levers' world, hands off (the wall taps are lever_one_site.sh's; here it is the link). Then the link is cut (netem loss 100 %): both levers must go to their safe states, stay
+# there when the link is back, and come back only by a re-arm.
+# usage: lever_two_sites.sh BIN_DIR
+set -uo pipefail
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/gpio_sim_lib.sh"
+. "$(dirname "$0")/lever_sites_lib.sh"
+trap stop_all EXIT
+
+lever_chip hsi && lever_chip top || exit 1
+write_config hsi vcan0
+write_config top vcan1 'transport = "rtu"' "device = \"$work/top-gauge.tty\"" 'baud = 115200'
+# Loopback carries only the bridges' datagrams here (the gauge is on the pty), so netem on lo is the link.
+check "netem: 20 ms one-way delay, 2 % loss on the link" tc qdisc add dev lo root netem delay 20ms loss 2%
+"$bin/lever-bridge" --can vcan0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key" --site-id 1 \
+  --stats-json >"$out/bridge-hsi.stats" 2>"$out/bridge-hsi.err" &
+pids+=("$!")
+"$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5001 --peer 127.0.0.1:5000 --key "$key" --site-id 2 \
+  --stats-json >"$out/bridge-top.stats" 2>"$out/bridge-top.err" &
+pids+=("$!")
+candump -r 8388608 -L vcan0 >"$out/two-sites-hsi.candump" &
+pids+=("$!")
+start_serve two-sites --duration 0 --hands-off --json --trace "$out/two-sites.trace.csv" || exit 1
+start_fw hsi
+start_fw top
+
+require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
+require "(TOP too)" wait_for 60 top '.state == "disarmed"'
+command vcan0 6
+require "home, sent at the HSI's site: the HSI homes" wait_for 120 hsi '.position_valid'
+require "and over the link, the TOP homes" wait_for 120 top '.position_valid'
+mark=$(log_mark "$out/two-sites-hsi.candump")
+command vcan0 1
+require "arm, sent at the HSI's site: the HSI arms" heard_armed "$out/two-sites-hsi.candump" "$mark" hsi
+require "and over the link, the TOP arms (its heartbeat relayed back)" heard_armed "$out/two-sites-hsi.candump" "$mark" top
+sleep 5
+check "the TOP's gauge answers over RTU ($(last_stat top .modbus.polls) polls, $(last_stat top .modbus.errors) errors)" \
+  test "$(last_stat top '.modbus.polls > 50 and .modbus.timeouts == 0')" = true
+check "the bridges carried the pair's frames both ways" \
+  test "$(tail -n 1 "$out/bridge-top.stats" | jq '.from_network.frames > 100 and .to_network.frames > 100')" = true
+check "netem lost some of them: the receiving bridge saw sequence gaps" \
+  test "$(tail -n 1 "$out/bridge-top.stats" | jq '.from_network.sequence_gaps > 0')" = true
+
+# The link cut: every datagram lost.
+tc qdisc change dev lo root netem delay 20ms loss 100%
+require "link cut: the HSI faults" wait_for 20 hsi '.state == "fault" and (.faults | index("comms_timeout") != null)'
+require "link cut: the TOP faults" wait_for 20 top '.state == "fault" and (.faults | index("comms_timeout") != null)'
+require "the HSI is safe: zero torque" wait_for 10 hsi '.torque_nm == 0'
+require "the TOP is safe: its hold ends at zero torque" wait_for 10 top '.torque_nm == 0'
+tc qdisc change dev lo root netem delay 20ms loss 2%
+sleep 3
+check "the link is back, and both stay in their safe states" \
+  test "$(last_stat hsi .state)/$(last_stat top .state)" = fault/fault
+mark=$(log_mark "$out/two-sites-hsi.candump")
+command vcan0 3
+check "re-arm: the HSI is armed again" heard_armed "$out/two-sites-hsi.candump" "$mark" hsi
+check "re-arm: the TOP is armed again" heard_armed "$out/two-sites-hsi.candump" "$mark" top
+
+kill -TERM "$serve_pid"
+wait "$serve_pid"; code=$?
+check "lever-hil serve exits 0 on SIGTERM (got $code)" test "$code" -eq 0
+report=$out/two-sites.report
+jq . "$report"
+r() { jq -r "$1" "$report"; }
+echo "measured: both armed $(r .armed_s) s, position rms error $(r .position_rmse) rad, packet rates velocity $(r .velocity_packet_rate) force $(r .force_packet_rate)"
+"$dbc_decode" --summary "$dbc" "$out/two-sites-hsi.candump" >"$work/decoded"; code=$?
+jq -c '.messages | map_values(.frames)' "$work/decoded"
+check "every frame on the HSI's bus decodes by the DBC, the TOP's relayed ones too (exit $code)" test "$code" -eq 0
+finish "lever-fw two sites"
