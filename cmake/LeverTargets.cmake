@@ -6,12 +6,6 @@ function(lever_target_defaults target)
   set(scope PRIVATE)
   target_compile_features(${target} ${scope} cxx_std_20)
   target_compile_options(${target} ${scope} -Wall -Wextra -Werror -Wshadow -Wconversion -Wno-sign-conversion)
-  # No fused multiply-add unless the source asks for one: GCC contracts a*b+c into an FMA by default (gnu++20)
-  # wherever the target has one (arm64, armhf's VFPv4, not x86-64's baseline), which changes the last bit of the
-  # codec's predictor and the HIL's integrators. Both ends of a link must compute the same reconstruction whatever
-  # CPU each was built for, and the HIL's regression bounds hold only for one arithmetic (on arm64 without this:
-  # a re-arm 50 ms late, encoder edges never lost in a stall).
-  target_compile_options(${target} ${scope} -ffp-contract=off)
   # GCC 12 reports a false -Wrestrict inside libstdc++'s std::string operator+ at -O3 (GCC bug 105651, fixed
   # in 13); every string concatenation would otherwise need a workaround.
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
