@@ -13,9 +13,11 @@ set(CMAKE_LIBRARY_ARCHITECTURE ${LEVER_CROSS_TRIPLET})
 # configure, then fail at link time with a less helpful message. Debian 12 ships no <triplet>-pkg-config wrapper.
 set(ENV{PKG_CONFIG_LIBDIR} "/usr/lib/${LEVER_CROSS_TRIPLET}/pkgconfig:/usr/share/pkgconfig")
 set(ENV{PKG_CONFIG_PATH} "")
-# Test programs run under qemu-user, with the cross toolchain's sysroot for the dynamic loader; the multiarch
-# libraries in /usr/lib/<triplet> are found through qemu's fallback to the real root. No binfmt_misc needed.
+# Test programs run under qemu-user (no binfmt_misc needed), in the real root: the multiarch libc6:<arch> that
+# the libraries above depend on puts the target's dynamic loader at its usual path, next to the libc it belongs
+# to. Not -L /usr/<triplet>: that is the cross toolchain's own glibc (libc6-<arch>-cross, another build), whose
+# loader with the multiarch libc.so.6 hangs in pthread_create (2.36-8cross1 against 2.36-9+deb12u14).
 find_program(LEVER_CROSS_QEMU_PROGRAM NAMES ${LEVER_CROSS_QEMU}-static ${LEVER_CROSS_QEMU})
 if(LEVER_CROSS_QEMU_PROGRAM)
-  set(CMAKE_CROSSCOMPILING_EMULATOR ${LEVER_CROSS_QEMU_PROGRAM} -L /usr/${LEVER_CROSS_TRIPLET})
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${LEVER_CROSS_QEMU_PROGRAM} -L /)
 endif()
