@@ -80,4 +80,22 @@ timeout 20 "$fw" --config "$work/nochip.toml" 2>"$work/err"; code=$?
 check "without the board's GPIO chip: exit 1 (got $code)" test "$code" -eq 1
 check "and names the encoder and the chip" grep -q "cannot open the encoder.*no-such-gpiochip" "$work/err"
 
+# --motor-off (the service's ExecStopPost=): a PWM channel left running by a lever-fw that died is stopped.
+pwm=$work/sys/class/pwm/pwmchip0
+mkdir -p "$pwm/pwm0" && : >"$pwm/export"
+printf '1\n' >"$pwm/pwm0/enable"; printf '25000\n' >"$pwm/pwm0/duty_cycle"
+printf '50000\n' >"$pwm/pwm0/period"; printf 'normal\n' >"$pwm/pwm0/polarity"
+printf '[board.motor]\nsysfs_root = "%s"\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n' "$work/sys" \
+  >"$work/motor.toml"
+timeout 20 "$fw" --config "$work/motor.toml" --motor-off 2>"$work/err"; code=$?
+check "--motor-off: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+check "--motor-off: the PWM is disabled" test "$(head -n1 "$pwm/pwm0/enable")" = 0
+check "--motor-off: at duty 0" test "$(head -n1 "$pwm/pwm0/duty_cycle")" = 0
+printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.toml"
+timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
+check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1
+check "--motor-off without the PWM: names it" grep -q "motor-off: cannot open the motor.*no-such-sys" "$work/err"
+"$fw" --config "$work/motor.toml" --motor-off --sim 2>/dev/null; code=$?
+check "--motor-off with --sim: exit 2 (got $code)" test "$code" -eq 2
+
 report "lever-fw cli"

@@ -12,6 +12,7 @@
 
 #include "lever/app/board_runner.hpp"
 #include "lever/app/fw_config.hpp"
+#include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
 #include "lever/cli/parse.hpp"
 #include "lever/hil/simulation.hpp"
@@ -76,7 +77,7 @@ int main(int argc, char** argv) {
       "0 success, 1 runtime failure, 2 bad input (command line or configuration)."};
   app.name("lever-fw");
   std::string config_path, role, can;
-  bool check_config = false, stats_json = false, sim = false, fast = false;
+  bool check_config = false, stats_json = false, sim = false, fast = false, motor_off = false;
   double duration_s = 10.0;
   app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")->required();
   app.add_option("--role", role, "override lever.role: hsi or top")->check(CLI::IsMember({"hsi", "top"}));
@@ -86,6 +87,10 @@ int main(int argc, char** argv) {
   app.add_flag("--sim", sim, "run against the in-process HIL instead of the board's hardware");
   app.add_option("--duration", duration_s, "with --sim: simulated seconds")->check(CLI::Range(0.1, 86400.0));
   app.add_flag("--fast", fast, "with --sim: as fast as the machine goes, not paced to the wall clock");
+  app.add_flag("--motor-off", motor_off,
+               "stop the board's motor (PWM disabled at duty 0, driver enable line off) and exit: for the service "
+               "manager after lever-fw ended, however it ended")
+      ->excludes("--sim", "--check-config");
   app.set_version_flag("--version", kVersion);
   if (const auto exit_code = cli::parse(app, argc, argv)) return *exit_code;
 
@@ -102,6 +107,7 @@ int main(int argc, char** argv) {
                app::schema_for(config).print());
     return 0;
   }
+  if (motor_off) return app::motor_off(config);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   if (sim) return run_sim(config, duration_s, stats_json, fast);

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# The Debian packages as an admin gets them (scripts/package): lintian on every package in DIST with no error;
+# the build machine's packages installed, purged and checked in a throw-away root; the systemd units verified,
+# a unit with a misspelt directive rejected by the same verify (so the check can fail), and each unit's
+# systemd-analyze security exposure printed and held under a ceiling.
+# usage: check_packages.sh DIST_DIR PACKAGING_SOURCE_DIR
+set -uo pipefail
+dist=$1
+units=$2/systemd
+source "$(dirname "$0")/../cli/lib.sh"
+arch=$(dpkg --print-architecture)
+shopt -s nullglob
+debs=("$dist"/*.deb)
+check "packages in $dist" test "${#debs[@]}" -gt 0
+
+# lintian: errors fail, warnings are shown (binary-without-manpage and the like).
+for deb in "${debs[@]}"; do
+  lintian --no-tag-display-limit --fail-on error "$deb" >"$work/lintian" 2>&1
+  code=$?
+  check "lintian: $(basename "$deb") has no error (exit $code)" test "$code" -eq 0
+  echo "lintian $(basename "$deb"): $(grep -c '^E:' "$work/lintian") errors, $(grep -c '^W:' "$work/lintian") warnings"
+  grep -E '^[EW]:' "$work/lintian" | sed 's/^/  /'
+done
+
+# Install, remove, purge in a throw-away root. The root holds no libc or systemd, so dependencies are forced;
+# the maintainer scripts run without chroot (there is nothing in the root to run them with) and must honour
+# DPKG_ROOT: the system users go into the root's /etc/passwd, and the running system is not touched.
+root=$work/root
+admin=$root/var/lib/dpkg
+mkdir -p "$admin/info" "$admin/updates" "$root/etc" && : >"$admin/status" && : >"$admin/available"
+host_passwd=$(sha256sum /etc/passwd /etc/group)
+dpkg_root() { dpkg --root="$root" --force-script-chrootless --force-depends --log=/dev/null "$@"; }
+for pkg in lever-fw lever-bridge lever-tools; do
+  dpkg_root -i "$dist/${pkg}_"*"_$arch.deb" >"$work/dpkg" 2>&1
+  check "install $pkg into a throw-away root: $(tail -n3 "$work/dpkg" | tr '\n' ' ')" test $? -eq 0
+done
+for file in /usr/bin/lever-fw /usr/bin/lever-bridge /usr/bin/lever-codec /usr/bin/lever-hil \
+  /etc/lever/top.toml /etc/lever/hsi.toml /etc/lever/top-float32.toml /etc/lever/bridge-example.toml \
+  /lib/systemd/system/lever-fw@.service /lib/systemd/system/lever-bridge@.service \
+  /lib/udev/rules.d/60-lever-gpio-pwm.rules /usr/share/doc/lever-fw/copyright \
+  /usr/share/doc/lever-tools/changelog.Debian.gz; do
+  check "installed: $file" test -e "$root$file"
+done
+check "no key shipped" test ! -e "$root/etc/lever/keys"
+check "the examples are conffiles" \
+  grep -q "/etc/lever/top.toml" <(dpkg-query --admindir="$admin" -W -f='${Conffiles}' lever-fw)
+check "postinst made the user lever, in groups gpio and dialout" \
+  grep -qE '^gpio:[^:]*:[0-9]+:(.*,)?lever(,|$)' "$root/etc/group"
+check "postinst made the user lever-bridge" grep -q '^lever-bridge:' "$root/etc/passwd"
+check "the running system's users are untouched" test "$(sha256sum /etc/passwd /etc/group)" = "$host_passwd"
+"$root/usr/bin/lever-fw" --config "$root/etc/lever/top.toml" --check-config >/dev/null
+check "the installed lever-fw reads the installed configuration" test $? -eq 0
+dpkg_root -r lever-fw lever-bridge lever-tools >"$work/dpkg" 2>&1
+check "remove: $(tail -n2 "$work/dpkg" | tr '\n' ' ')" test $? -eq 0
+check "remove: the programs are gone" test ! -e "$root/usr/bin/lever-fw"
+check "remove: the edited-or-not conffiles stay" test -e "$root/etc/lever/top.toml"
+dpkg_root -P lever-fw lever-bridge lever-tools >"$work/dpkg" 2>&1
+check "purge: $(tail -n2 "$work/dpkg" | tr '\n' ' ')" test $? -eq 0
+left=$(cd "$root" && find . -not -type d -not -path './var/lib/dpkg/*' -not -path './etc/passwd*' \
+  -not -path './etc/group*' -not -path './etc/shadow*' -not -path './etc/gshadow*' -not -path './etc/.pwd.lock' | sort)
+check "purge leaves nothing but dpkg's database and the users (left: ${left:-nothing})" test -z "$left"
+
+# The units: systemd-analyze verify where the programs they start exist (it checks ExecStart= paths).
+for unit in lever-fw@top lever-bridge@site-a; do
+  template=${unit%@*}@.service
+  systemd-analyze verify --man=no "$units/$template" >"$work/verify" 2>&1
+  grep -v -e 'is not executable' -e 'Command .* not found' "$work/verify" >"$work/verify.real"
+  check "verify $template: $(cat "$work/verify.real")" test ! -s "$work/verify.real"
+done
+mkdir -p "$work/typo"
+sed 's/^NoNewPrivileges=/NoNewPrivilege=/' "$units/lever-fw@.service" >"$work/typo/lever-fw@.service"
+systemd-analyze verify --man=no "$work/typo/lever-fw@.service" >"$work/verify" 2>&1
+check "verify rejects a misspelt directive" grep -q "Unknown key 'NoNewPrivilege'" "$work/verify"
+
+# Exposure (0 safest, 10 none), offline on the unit files; each held at its level now, so that a hardening line lost fails.
+for unit in lever-fw@.service:2.0 lever-bridge@.service:1.7; do
+  name=${unit%:*} ceiling=${unit#*:}
+  systemd-analyze security --offline=yes --threshold="${ceiling/./}" "$units/$name" >"$work/security" 2>&1
+  code=$?
+  echo "systemd-analyze security: $(grep -o 'Overall exposure level.*' "$work/security")"
+  check "$name: exposure at most $ceiling (exit $code)" test "$code" -eq 0
+done
+report "packages"
