@@ -38,11 +38,14 @@ check "lever-hil serve ran its 15 s scenario and exited 0 (got $code)" test "$co
 report=$out/one-site.report
 jq . "$report"
 r() { jq -r "$1" "$report"; }
-# Tracking and staying armed through the wall taps are measured, not asserted, here: under TCG the guest
-# writes a few thousand encoder edges a second and stalls for tens of milliseconds, and the TOP's position loop
-# (tuned for 16384 counts and a 1 ms loop) bounces off the stiff wall in it, losing edges (docs/hil-serve.md
-# has the runs). The bound the firmware is held to is lever-hil run's (tests/hil/wall_tap_bounds.json).
-echo "measured: armed $(r .armed_s) s of 15, position rms error $(r .position_rmse) rad, largest $(r .serve.max_position_error_rad) rad, slips $(r .serve.slips), encoder backlog $(r -c .serve.encoder_max_backlog)"
+# Bounds, from the physics before the run: the TOP's position loop (40 N m/rad) saturates at the 1 N m torque
+# limit 25 mrad away from its reference, so tracking within that on average is what the loop can do; in
+# contact the HSI goes past the wall the TOP stops at, by the displayed force over the operator's stiffness
+# (up to ~10 N x 0.1 m / 3 N m/rad = 0.33 rad), which bounds the largest difference. (Under TCG these fail:
+# docs/hil-serve.md, "What the emulator cannot show".)
+check "both levers stayed armed through the scenario (armed $(r .armed_s) s)" test "$(r '.armed_s >= 14.5')" = true
+check "the TOP follows the HSI: rms error $(r .position_rmse) rad < 0.025" test "$(r '.position_rmse < 0.025')" = true
+check "largest error $(r .serve.max_position_error_rad) rad < 0.35" test "$(r '.serve.max_position_error_rad < 0.35')" = true
 check "the TOP touches the wall ($(r .contact_share) of the time, $(r .mean_contact_force_n) N)" \
   test "$(r '.contact_share > 0.05 and .mean_contact_force_n > 0.5')" = true
 check "the wall force comes back to the HSI's bus (up to $(r .serve.max_displayed_force_n) N)" \
@@ -54,7 +57,7 @@ check "packet rates below 1 kHz: velocity $(r .velocity_packet_rate), force $(r 
 check "the TOP's lever-fw polled the Modbus gauge ($(r .serve.gauge_requests) requests)" \
   test "$(r '.serve.gauge_requests > 100')" = true
 check "the HSI displayed a remote force" test "$(jq -s 'map(.remote // 0) | max > 1' "$out/hsi.stats")" = true
-echo "measured: encoder edges lost HSI $(last_stat hsi .encoder.lost), TOP $(last_stat top .encoder.lost)"
+check "no encoder edge lost" test "$(last_stat hsi .encoder.lost)/$(last_stat top .encoder.lost)" = 0/0
 
 kill -TERM "$hsi_pid" "$top_pid"
 wait "$hsi_pid"; hsi_code=$?
