@@ -14,6 +14,7 @@
 
 #include "bus_watch.hpp"
 #include "lever/app/fw_config.hpp"
+#include "lever/app/stats_line.hpp"
 #include "lever/common/rng.hpp"
 #include "lever/hil/devices/encoder_lines.hpp"
 #include "lever/hil/devices/gauge_server.hpp"
@@ -87,22 +88,7 @@ std::optional<LeverDevices> open_devices(const app::FwConfig& config, double ang
   return d;
 }
 
-const char* state_name(const WatchedLever& l) {
-  if (!l.heartbeat) return "silent";
-  switch (l.heartbeat->state) {
-    case protocol::LeverState::init:
-      return "init";
-    case protocol::LeverState::disarmed:
-      return "disarmed";
-    case protocol::LeverState::armed:
-      return "armed";
-    case protocol::LeverState::fault:
-      return "fault";
-    case protocol::LeverState::homing:
-      return "homing";
-  }
-  return "?";
-}
+std::string state_name(const WatchedLever& l) { return l.heartbeat ? app::state_name(l.heartbeat->state) : "silent"; }
 
 std::string faults_text(const WatchedLever& l) {
   if (!l.heartbeat || l.heartbeat->faults == 0) return "";

@@ -16,8 +16,8 @@ constexpr Nanos kTick = 1'000'000;
 constexpr fw::Tick kHostPeriod = 100;       // the host looks at the levers every 100 ms
 constexpr fw::Tick kPowerUpLimit = 30'000;  // homing and arming must be done by then
 
-// One lever's controller and hardware, at one site (its mechanics are in the World). The firmware can be rebooted: it is rebuilt from its
-// power-up state on the same hardware, with its own tick counting from 1 again.
+// One lever's controller and hardware, at one site (its mechanics are in the World). The firmware can be rebooted: it
+// is rebuilt from its power-up state on the same hardware, with its own tick counting from 1 again.
 template <typename LeverT>
 struct LeverSite {
   LeverSite(const fw::LeverConfig& fw_config, double angle, const StrainGaugeParams& gauge, std::uint64_t seed,
