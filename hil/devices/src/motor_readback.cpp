@@ -174,9 +174,9 @@ MotorReading MotorReadback::read() noexcept {
   s.take(read_unsigned(s.enable.get()), s.enable_value);
   s.take(read_unsigned(s.duty.get()), s.duty_ns);
   // The period and polarity are set when lever-fw opens the channel and never again while it runs: read
-  // every 100th call, which saves a third of the reads in the world's 1 kHz loop (it shares a guest's one
-  // emulated CPU with two lever-fw processes).
-  if (s.reads++ % 100 == 0) {
+  // every 100th call once the channel has a period, which saves a third of the reads in the world's 1 kHz loop
+  // (it shares an emulated guest's CPUs with two lever-fw processes). No period yet: read until there is one.
+  if (s.reads++ % 100 == 0 || s.period_ns == 0) {
     s.take(read_unsigned(s.period.get()), s.period_ns);
     s.take(read_inversed(s.polarity.get()), s.inversed);
   }
