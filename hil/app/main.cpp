@@ -119,15 +119,8 @@ SimConfig finish(RunOptions& o) {
 }
 
 void write_trace(const std::string& path, const SimResult& r) {
-  std::string out =
-      "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,hsi_torque,"
-      "top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
-  for (const auto& row : r.trace) {
-    out += fmt::format("{:.3f},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n",
-                       row.t, row.hsi_angle, row.top_angle, row.hsi_velocity, row.top_position_ref, row.contact_force,
-                       row.measured_force, row.displayed_force, row.hsi_torque, row.top_torque, row.hand_force,
-                       row.motion_sent, row.force_sent, row.hsi_state, row.top_state);
-  }
+  std::string out = trace_csv_header();
+  for (const auto& row : r.trace) out += trace_csv_row(row);
   std::ofstream f(path);
   f << out;
   if (!f) throw std::runtime_error("cannot write trace " + path);

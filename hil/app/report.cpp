@@ -1,5 +1,7 @@
 #include "report.hpp"
 
+#include <fmt/format.h>
+
 namespace lever::hil {
 namespace {
 
@@ -37,6 +39,18 @@ std::string scenario_name(ScenarioKind kind) {
       return "press-hold";
   }
   return "?";
+}
+
+std::string trace_csv_header() {
+  return "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,"
+         "hsi_torque,top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
+}
+
+std::string trace_csv_row(const TraceRow& r) {
+  return fmt::format("{:.3f},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n", r.t,
+                     r.hsi_angle, r.top_angle, r.hsi_velocity, r.top_position_ref, r.contact_force, r.measured_force,
+                     r.displayed_force, r.hsi_torque, r.top_torque, r.hand_force, r.motion_sent, r.force_sent,
+                     r.hsi_state, r.top_state);
 }
 
 nlohmann::json report_json(const SimConfig& config, const SimResult& r) {

@@ -19,6 +19,7 @@
 #include "lever/hil/devices/encoder_lines.hpp"
 #include "lever/hil/devices/gauge_server.hpp"
 #include "lever/hil/devices/motor_readback.hpp"
+#include "lever/hil/run_metrics.hpp"
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
 #include "lever/hil/world.hpp"
@@ -169,9 +170,7 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
       fmt::print(stderr, "lever-hil serve: cannot write the trace {}: {}\n", o.trace, std::strerror(errno));
       return kRuntimeFailure;
     }
-    fmt::print(trace.get(),
-               "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,"
-               "hsi_torque,top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n");
+    std::fputs(trace_csv_header().c_str(), trace.get());
   }
   fmt::print(
       stderr,
@@ -182,8 +181,7 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
 
   SimResult result;
   ServeExtras extras;
-  double sq_position = 0, sq_force = 0, contact_force_sum = 0;
-  std::uint64_t violations = 0, contact_ticks = 0;
+  RunMetrics metrics(sim.jnd, sim.jnd_absolute_n);
   const auto wall_start = Clock::now();
   auto grid_start = wall_start;
   std::int64_t grid_tick = 0;  // ticks since grid_start
@@ -254,38 +252,39 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
     }
     world.update_operator(tick, hand);
 
+    // Frames sent before the scenario (homing, arming) are not the scenario's: taken every tick, counted in it.
+    const auto motion_sent = watch.take_motion_frames();
+    const auto force_sent = watch.take_force_frames();
     if (!scenario_start) continue;
     const fw::Tick t_ticks = tick - *scenario_start;
     const double t = static_cast<double>(t_ticks) * 1e-3;
     if (!hsi_heard) ++extras.hsi_silent_ms;
     if (!top_heard) ++extras.top_silent_ms;
-    const auto motion_sent = watch.take_motion_frames();
-    const auto force_sent = watch.take_force_frames();
     const double displayed = watch.force_at_hsi().value_or(0.0);
     if (both_armed) {
-      ++result.armed_ticks;
-      result.motion_frames += motion_sent;
-      result.force_frames += force_sent;
       const double dp = world.top().angle() - world.hsi().angle();
-      sq_position += dp * dp;
+      metrics.add_armed_tick(motion_sent, force_sent, dp, displayed, measured_force, contact);
       extras.max_position_error_rad = std::max(extras.max_position_error_rad, std::fabs(dp));
-      const double df = displayed - measured_force;
-      sq_force += df * df;
-      if (std::fabs(df) > std::max(sim.jnd * std::fabs(measured_force), sim.jnd_absolute_n)) ++violations;
       extras.max_displayed_force_n = std::max(extras.max_displayed_force_n, displayed);
-      if (contact > 0.0) {
-        ++contact_ticks;
-        contact_force_sum += contact;
-        extras.hsi_torque_in_contact_sum += hsi_command.enable ? hsi_command.torque_nm : 0.0;
-      }
+      if (contact > 0.0) extras.hsi_torque_in_contact_sum += hsi_command.enable ? hsi_command.torque_nm : 0.0;
     }
     if (trace) {
-      fmt::print(trace.get(),
-                 "{:.3f},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n", t,
-                 world.hsi().angle(), world.top().angle(), world.hsi().speed(), watch.position_sent().value_or(0.0),
-                 contact, measured_force, displayed, hsi_command.enable ? hsi_command.torque_nm : 0.0,
-                 top_command.enable ? top_command.torque_nm : 0.0, hand, motion_sent, force_sent,
-                 state_number(hsi_watch), state_number(top_watch));
+      const TraceRow row{t,
+                         world.hsi().angle(),
+                         world.top().angle(),
+                         world.hsi().speed(),
+                         watch.position_sent().value_or(0.0),
+                         contact,
+                         measured_force,
+                         displayed,
+                         hsi_command.enable ? hsi_command.torque_nm : 0.0,
+                         top_command.enable ? top_command.torque_nm : 0.0,
+                         hand,
+                         static_cast<int>(motion_sent),
+                         static_cast<int>(force_sent),
+                         state_number(hsi_watch),
+                         state_number(top_watch)};
+      std::fputs(trace_csv_row(row).c_str(), trace.get());
     }
     if (t_ticks % 1000 == 0) {
       fmt::print(stderr,
@@ -293,19 +292,12 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
                  "shown {:5.2f} N  frames motion {} force {}  lag {} ms\n",
                  t, state_name(hsi_watch), faults_text(hsi_watch), world.hsi().angle(), hsi_command.torque_nm,
                  state_name(top_watch), faults_text(top_watch), world.top().angle(), top_command.torque_nm, contact,
-                 displayed, result.motion_frames, result.force_frames, extras.max_lag_ms);
+                 displayed, metrics.motion_frames(), metrics.force_frames(), extras.max_lag_ms);
     }
     if (scenario_ticks > 0 && t_ticks >= scenario_ticks) break;
   }
 
-  const double n = result.armed_ticks > 0 ? static_cast<double>(result.armed_ticks) : 1.0;
-  result.velocity_packet_rate = static_cast<double>(result.motion_frames) / n;
-  result.force_packet_rate = static_cast<double>(result.force_frames) / n;
-  result.position_rmse_rad = std::sqrt(sq_position / n);
-  result.force_rmse_n = std::sqrt(sq_force / n);
-  result.force_jnd_violation = static_cast<double>(violations) / n;
-  result.contact_share = static_cast<double>(contact_ticks) / n;
-  result.mean_contact_force_n = contact_ticks > 0 ? contact_force_sum / static_cast<double>(contact_ticks) : 0.0;
+  metrics.finish(result);
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const double scenario_s = scenario_start ? static_cast<double>(tick - *scenario_start) * 1e-3 : 0.0;
   result.realtime_factor = result.wall_time_s > 0 ? (result.homed_at_s + scenario_s) / result.wall_time_s : 0.0;
@@ -317,7 +309,8 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
   report["serve"] = {
       {"max_position_error_rad", extras.max_position_error_rad},
       {"mean_hsi_torque_in_contact_nm",
-       contact_ticks > 0 ? extras.hsi_torque_in_contact_sum / static_cast<double>(contact_ticks) : 0.0},
+       metrics.contact_ticks() > 0 ? extras.hsi_torque_in_contact_sum / static_cast<double>(metrics.contact_ticks())
+                                   : 0.0},
       {"max_displayed_force_n", extras.max_displayed_force_n},
       {"slips", extras.slips},
       {"max_lag_ms", extras.max_lag_ms},
@@ -333,7 +326,8 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
     fmt::print("served {:.1f} s of {} after {:.1f} s of homing and arming\n", scenario_s, scenario_name(o.scenario),
                result.homed_at_s);
     fmt::print("  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz (while both armed: {:.1f} s)\n",
-               100 * result.velocity_packet_rate, 100 * result.force_packet_rate, 1e-3 * n);
+               100 * result.velocity_packet_rate, 100 * result.force_packet_rate,
+               1e-3 * static_cast<double>(result.armed_ticks));
     fmt::print("  position rmse {:.2f} mrad (max {:.2f}), force rmse {:.3f} N, force off by more than a JND {:.1f} %\n",
                1000 * result.position_rmse_rad, 1000 * extras.max_position_error_rad, result.force_rmse_n,
                100 * result.force_jnd_violation);

@@ -7,6 +7,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/hil/can_bus.hpp"
+#include "lever/hil/run_metrics.hpp"
 #include "lever/hil/world.hpp"
 
 namespace lever::hil {
@@ -187,8 +188,7 @@ SimResult run_simulation(const SimConfig& config) {
   for (const auto& f : config.faults) result.faults.push_back({f, {}, {}});
   std::vector<bool> rebooted(config.faults.size(), false);
   const auto scenario_ticks = static_cast<fw::Tick>(std::llround(config.duration_s * 1000.0));
-  double sq_position = 0, sq_force = 0, contact_force_sum = 0;
-  std::uint64_t violations = 0, contact_ticks = 0;
+  RunMetrics metrics(config.jnd, config.jnd_absolute_n);
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
   fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
 
@@ -318,19 +318,9 @@ SimResult run_simulation(const SimConfig& config) {
     const double measured = tt.force_n.value_or(0.0);
     const double displayed = ht.remote.value_or(0.0);
     if (both_armed) {
-      ++result.armed_ticks;
-      result.motion_frames += ht.sent_data;
-      result.force_frames += tt.sent_data;
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
-      const double dp = world.top().angle() - world.hsi().angle();
-      sq_position += dp * dp;
-      const double df = displayed - measured;
-      sq_force += df * df;
-      if (std::fabs(df) > std::max(config.jnd * std::fabs(measured), config.jnd_absolute_n)) ++violations;
-      if (contact > 0.0) {
-        ++contact_ticks;
-        contact_force_sum += contact;
-      }
+      metrics.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), displayed, measured,
+                             contact);
     }
     for (auto& r : result.faults) {
       track_reaction(r.hsi, *hsi, t, r.spec.start_s);
@@ -354,14 +344,7 @@ SimResult run_simulation(const SimConfig& config) {
 
   const auto& hl = *hsi->lever;
   const auto& tl = *top->lever;
-  const double n = result.armed_ticks > 0 ? static_cast<double>(result.armed_ticks) : 1.0;
-  result.velocity_packet_rate = static_cast<double>(result.motion_frames) / n;
-  result.force_packet_rate = static_cast<double>(result.force_frames) / n;
-  result.position_rmse_rad = std::sqrt(sq_position / n);
-  result.force_rmse_n = std::sqrt(sq_force / n);
-  result.force_jnd_violation = static_cast<double>(violations) / n;
-  result.contact_share = static_cast<double>(contact_ticks) / n;
-  result.mean_contact_force_n = contact_ticks > 0 ? contact_force_sum / static_cast<double>(contact_ticks) : 0.0;
+  metrics.finish(result);
   result.bus_load_hsi = hsi_bus.load();
   result.bus_load_top = top_bus.load();
   result.network_sent = to_top.stats().sent + to_hsi.stats().sent;
