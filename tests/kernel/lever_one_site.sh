@@ -10,18 +10,11 @@ set -uo pipefail
 . "$(dirname "$0")/lever_sites_lib.sh"
 trap stop_all EXIT
 
-lever_chip hsi && lever_chip top || exit 1
-write_config hsi vcan0
-write_config top vcan0 'transport = "tcp"' 'host = "127.0.0.1"' 'port = 1502'
-candump -r 8388608 -L vcan0 >"$out/one-site.candump" &
-pids+=("$!")
-start_serve one-site --duration 15 --json --trace "$out/one-site.trace.csv" || exit 1
-start_fw hsi
-start_fw top
+one_site one-site --duration 15 --json --trace "$out/one-site.trace.csv"
 
 require "both levers come up disarmed and not homed" wait_for 60 hsi '.state == "disarmed" and (.position_valid | not)'
 require "(TOP too)" wait_for 60 top '.state == "disarmed" and (.position_valid | not)'
-check "a command refused before homing: arm leaves them disarmed" command vcan0 1
+command vcan0 1  # arm, before homing: refused
 sleep 1
 check "not armed unhomed" test "$(last_stat hsi .state)/$(last_stat top .state)" = disarmed/disarmed
 command vcan0 6

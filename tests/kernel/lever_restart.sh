@@ -9,14 +9,7 @@ set -uo pipefail
 . "$(dirname "$0")/lever_sites_lib.sh"
 trap stop_all EXIT
 
-lever_chip hsi && lever_chip top || exit 1
-write_config hsi vcan0
-write_config top vcan0 'transport = "tcp"' 'host = "127.0.0.1"' 'port = 1502'
-candump -r 8388608 -L vcan0 >"$out/restart.candump" &
-pids+=("$!")
-start_serve restart --duration 0 --hands-off --json --trace "$out/restart.trace.csv" || exit 1
-start_fw hsi
-start_fw top
+one_site restart --duration 0 --hands-off --json --trace "$out/restart.trace.csv"
 require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
 require "(TOP too)" wait_for 60 top '.state == "disarmed"'
 command vcan0 6

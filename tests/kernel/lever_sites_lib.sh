@@ -49,6 +49,20 @@ write_config() {
   } >"$work/$role.toml"
 }
 
+# one_site NAME SERVE_ARGS...: both levers on vcan0 (the TOP's gauge on Modbus TCP), candump logging vcan0 to
+# $out/NAME.candump, serve started, then both lever-fw
+one_site() {
+  local name=$1; shift
+  lever_chip hsi && lever_chip top || exit 1
+  write_config hsi vcan0
+  write_config top vcan0 'transport = "tcp"' 'host = "127.0.0.1"' 'port = 1502'
+  candump -r 8388608 -L vcan0 >"$out/$name.candump" &
+  pids+=("$!")
+  start_serve "$name" "$@" || exit 1
+  start_fw hsi
+  start_fw top
+}
+
 # start_serve NAME ARGS...: lever-hil serve in the background, waiting until its devices are up
 start_serve() {
   local name=$1; shift
