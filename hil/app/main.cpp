@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "lever/cli/parse.hpp"
+#include "lever/program/parse.hpp"
 #include "report.hpp"
 #include "serve.hpp"
 #include "sweep.hpp"
@@ -20,7 +20,7 @@ namespace {
 using namespace lever::hil;
 using lever::codec::Mode;
 
-constexpr int kBadInput = lever::cli::kBadInput;
+constexpr int kBadInput = lever::program::kBadInput;
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
@@ -220,7 +220,7 @@ int main(int argc, char** argv) {
   serve->add_flag("--json", serve_options.json, "print the report as one JSON object");
   serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns)");
 
-  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
+  if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
 
   try {
     if (run->parsed()) {

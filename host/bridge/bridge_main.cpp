@@ -12,13 +12,13 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "key.hpp"
-#include "lever/cli/parse.hpp"
+#include "lever/program/parse.hpp"
 #include "relay.hpp"
 
 namespace {
 
 using namespace lever::bridge;
-constexpr int kBadInput = lever::cli::kBadInput;
+constexpr int kBadInput = lever::program::kBadInput;
 
 int fail(int code, const std::string& message) {
   fmt::print(stderr, "lever-bridge: {}\n", message);
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   auto* keygen = app.add_subcommand("keygen", "print a new random key in the key file format");
   app.require_subcommand(0, 1);
 
-  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
+  if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
   if (sodium_init() < 0) return fail(1, "libsodium failed to initialize");
   if (keygen->parsed()) {
     fmt::print("{}", format_key(generate_key()));

@@ -7,13 +7,13 @@
 #include <string>
 
 #include "codec_run.hpp"
-#include "lever/cli/parse.hpp"
+#include "lever/program/parse.hpp"
 #include "trace_csv.hpp"
 #include "trace_generator.hpp"
 
 namespace {
 
-constexpr int kBadInput = lever::cli::kBadInput;
+constexpr int kBadInput = lever::program::kBadInput;
 
 int fail(const std::string& message) {
   fmt::print(stderr, "lever-codec: {}\n", message);
@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
   generate->add_option("--out", gen_out, "output trace CSV")->required();
   app.require_subcommand(0, 1);
 
-  if (const auto stop = lever::cli::parse(app, argc, argv)) return *stop;
+  if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
 
   try {
     if (generate->parsed()) {

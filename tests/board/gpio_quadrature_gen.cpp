@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "lever/cli/parse.hpp"
+#include "lever/program/parse.hpp"
 
 namespace {
 
@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
   app.add_option("--rate", rate, "edges per second at the start (0: unpaced)")->capture_default_str();
   app.add_option("--summary", summary_path, "write the JSON summary here instead of stdout");
   app.add_option("steps", steps, "the steps")->required();
-  if (const auto code = lever::cli::parse(app, argc, argv)) return *code;
+  if (const auto code = lever::program::parse(app, argc, argv)) return *code;
 
   try {
     Generator g(dir, a, b, z, rate);

@@ -14,14 +14,14 @@
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
-#include "lever/cli/parse.hpp"
+#include "lever/program/parse.hpp"
 #include "lever/hil/simulation.hpp"
 
 namespace {
 
 using namespace lever;
 
-constexpr int kBadInput = cli::kBadInput;
+constexpr int kBadInput = program::kBadInput;
 constexpr const char* kVersion = "lever-fw 0.1.0";
 
 std::atomic<bool> g_stop{false};
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
                "manager after lever-fw ended, however it ended")
       ->excludes("--sim", "--check-config");
   app.set_version_flag("--version", kVersion);
-  if (const auto exit_code = cli::parse(app, argc, argv)) return *exit_code;
+  if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
   auto loaded = app::load_fw_config(config_path);
   if (!loaded.error.empty()) {

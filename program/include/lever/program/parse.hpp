@@ -6,7 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <optional>
 
-namespace lever::cli {
+namespace lever::program {
 
 inline constexpr int kBadInput = 2;
 
@@ -29,4 +29,4 @@ inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   }
 }
 
-}  // namespace lever::cli
+}  // namespace lever::program
