@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -43,7 +44,29 @@ struct RunOptions {
   std::vector<std::string> faults;
   bool json = false;
   std::string trace;
+  double gauge_rate_hz = StrainGaugeParams{}.output_rate_hz();
 };
+
+// A number in [lo, hi], or exactly 0 when zero_ok; CLI::Range alone lets "nan" through.
+CLI::Validator number_in(double lo, double hi, bool zero_ok = false) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) ||
+            !((v >= lo && v <= hi) || (zero_ok && v == 0.0)))
+          return fmt::format("{} is not {}a number in [{}, {}]", text, zero_ok ? "0 or " : "", lo, hi);
+        return {};
+      },
+      fmt::format("{}NUMBER in [{} - {}]", zero_ok ? "0 or " : "", lo, hi));
+}
+
+// The amplifier's output rates: its conversion rate over 2^UR, UR = 0..7 (docs/hil-model.md).
+int averaging_for(double rate_hz) {
+  const double adc = StrainGaugeParams{}.adc_rate_hz;
+  for (int n = 1; n <= 128; n *= 2)
+    if (std::fabs(adc / n - rate_hz) <= 1e-9 * adc) return n;
+  return 0;
+}
 
 void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--scenario", o.config.scenario, "wall-tap (the paper's task), free-motion or press-hold")
@@ -99,6 +122,28 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault, tick-late (the firmware not "
                  "stepped for DURATION), reboot (the controller restarts; +DURATION of boot time) (:hsi|:top); "
                  "repeatable");
+  const StrainGaugeParams gauge;
+  cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
+                 "the force amplifier's IIR cut-off, Hz (Flintec DAD 141.1: 18, 8, 4, 3, 2, 1, 0.5, 0.25; 0: off)")
+      ->check(number_in(0.1, 100.0, true))
+      ->default_str(fmt::format("{}", gauge.filter_hz));
+  cmd.add_option("--gauge-rate-hz", o.gauge_rate_hz,
+                 "the force amplifier's output rate, readings per second (600 / 2^k, k = 0..7)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || averaging_for(v) == 0)
+              return text + " is not 600 / 2^k for k = 0..7 (600, 300, 150, 75, 37.5, 18.75, 9.375, 4.6875)";
+            return {};
+          },
+          "600 / 2^k"))
+      ->default_str(fmt::format("{}", gauge.output_rate_hz()));
+  cmd.add_option("--gauge-noise-n", o.config.gauge.noise_n, "the force amplifier's noise per conversion, N rms")
+      ->check(number_in(0.0, 1.0))
+      ->default_str(fmt::format("{}", gauge.noise_n));
+  cmd.add_option("--gauge-step-n", o.config.gauge.step_n, "the force amplifier's display step, N")
+      ->check(number_in(1e-6, 1.0))
+      ->default_str(fmt::format("{}", gauge.step_n));
   cmd.add_flag("--json", o.json, "print one JSON object");
   cmd.add_option("--trace", o.trace, "write a per-tick CSV trace");
 }
@@ -113,6 +158,7 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
   c.homing = !o.no_homing;
+  c.gauge.averaging = averaging_for(o.gauge_rate_hz);
 
   c.record_trace = !o.trace.empty();
   return c;

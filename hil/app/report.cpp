@@ -101,7 +101,9 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"substeps", config.substeps},
         {"wall_stiffness", config.wall.stiffness},
         {"gauge_noise_n", config.gauge.noise_n},
-        {"gauge_rate_hz", config.gauge.sample_rate_hz}}},
+        {"gauge_filter_hz", config.gauge.filter_hz},
+        {"gauge_rate_hz", config.gauge.output_rate_hz()},
+        {"gauge_step_n", config.gauge.step_n}}},
       {"realtime_factor", r.realtime_factor},
       {"wall_time_s", r.wall_time_s},
   };

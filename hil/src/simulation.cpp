@@ -139,6 +139,8 @@ SimResult run_simulation(const SimConfig& config) {
   fw::LeverConfig hsi_fw = config.hsi_firmware, top_fw = config.top_firmware;
   hsi_fw.motion_codec = config.velocity_codec;
   top_fw.force_codec = config.force_codec;
+  calibrate_for(hsi_fw.gauge, config.gauge);
+  calibrate_for(top_fw.gauge, config.gauge);
   // Power-up angles: anywhere in the working range with homing, the operator's start angle without.
   double hsi_angle = 0.1, top_angle = 0.1;
   if (config.homing) {

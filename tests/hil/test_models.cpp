@@ -1,4 +1,5 @@
-// The HIL's models on their own: bus timing and arbitration, the network link, encoder, gauge, operator.
+// The HIL's models on their own: bus timing and arbitration, the network link, encoder, operator (the gauge's
+// amplifier in test_strain_gauge_model.cpp).
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
@@ -8,7 +9,6 @@
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/network.hpp"
 #include "lever/hil/quadrature_encoder.hpp"
-#include "lever/hil/strain_gauge_model.hpp"
 #include "lever/hil/wall.hpp"
 
 using namespace lever;
@@ -165,35 +165,6 @@ TEST_CASE("edges beyond the queue's capacity are lost, counted and reported to t
   CHECK(d.count == 32u);
   CHECK(d.lost == 2607u - 32u);
   CHECK(encoder.drain_edges(edges, 64).lost == 0u);  // said once
-}
-
-TEST_CASE("the gauge samples at its own rate, with noise of the configured size", "[hil][gauge]") {
-  StrainGaugeParams p;
-  p.sample_rate_hz = 500.0;
-  p.noise_n = 0.02;
-  StrainGaugeModel gauge(p, 3);
-  int fresh = 0;
-  fw::Tick last = 0;
-  double sum = 0, sum_sq = 0;
-  for (fw::Tick now = 1; now <= 10000; ++now) {
-    gauge.update(2.0, now);
-    const auto r = gauge.latest();
-    REQUIRE(r);
-    if (r->tick != last) {
-      ++fresh;
-      last = r->tick;
-      const double f = r->raw * p.newton_per_count;
-      sum += f;
-      sum_sq += f * f;
-    }
-  }
-  CHECK(fresh == Approx(5000).margin(2));
-  const double mean = sum / fresh;
-  CHECK(mean == Approx(2.0).margin(0.002));
-  CHECK(std::sqrt(sum_sq / fresh - mean * mean) == Approx(0.02).epsilon(0.05));
-  gauge.set_saturated(true);
-  gauge.update(2.0, 10002);
-  CHECK(gauge.latest()->raw == 32767);
 }
 
 TEST_CASE("the wall pushes, never pulls", "[hil][wall]") {
