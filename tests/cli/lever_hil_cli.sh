@@ -22,6 +22,14 @@ expect_bad "unknown scenario" "--scenario" run --scenario moonwalk
 expect_bad "negative p" "--p" run --p -1
 expect_bad "bad fault kind" "unknown kind 'meteor'" run --fault meteor@1
 expect_bad "bad fault time" "start 'soon'" run --fault link-down@soon
+expect_bad "gauge filter not a number" "--gauge-filter-hz" run --gauge-filter-hz nan
+expect_bad "gauge filter out of range" "--gauge-filter-hz" run --gauge-filter-hz 500
+expect_bad "gauge rate not the amplifier's" "600 / 2^k" run --gauge-rate-hz 500
+expect_bad "gauge noise negative" "--gauge-noise-n" run --gauge-noise-n -0.1
+expect_bad "gauge step zero" "--gauge-step-n" run --gauge-step-n 0
+"$hil" run --duration 0.5 --gauge-filter-hz 4 --gauge-rate-hz 150 --gauge-noise-n 0.03 --gauge-step-n 0.01 --json >"$work/g.json"
+check "the gauge options reach the model" jq -e '.parameters | .gauge_filter_hz == 4 and .gauge_rate_hz == 150 and
+  .gauge_noise_n == 0.03 and .gauge_step_n == 0.01' "$work/g.json"
 
 args=(run --scenario wall-tap --duration 2 --seed 7 --delay-ms 10 --jitter-ms 3 --loss 0.05 --fault link-down@1+0.2 --json)
 "$hil" "${args[@]}" >"$work/a.json"; check "run --json exits 0" test $? -eq 0

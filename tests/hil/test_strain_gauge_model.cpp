@@ -82,8 +82,10 @@ TEST_CASE("the amplifier's IIR settles to 0.1 % in the times the DAD 141.1's man
     const fw::Tick step_at = 1000;
     const auto r = run(
         clean(s.cutoff_hz), [&](fw::Tick t) { return t >= step_at ? 40.0 : 0.0; }, step_at + 6000);
-    // Within 6 %: the two-pole shape is 2 to 4 % faster than the manual, one conversion (1.7 ms) is the clock.
-    CHECK(settling_ms(r, step_at, 40.0, 1e-3) == Approx(s.settling_ms).epsilon(0.06));
+    // Two equal poles settle 2 to 4 % faster than the manual says (docs/hil-model.md); the readings come at the
+    // amplifier's conversions and the firmware's ticks, up to a conversion period and a tick later.
+    const double clock_ms = 1000.0 / 600.0 + 1.0;
+    CHECK(std::fabs(settling_ms(r, step_at, 40.0, 1e-3) - s.settling_ms) <= 0.04 * s.settling_ms + clock_ms);
   }
 }
 
@@ -91,7 +93,8 @@ TEST_CASE("the amplifier's step reaches 63 % and 90 % when two equal poles at th
   for (const double cutoff_hz : {1.0, 4.0}) {
     CAPTURE(cutoff_hz);
     const StrainGaugeParams p = clean(cutoff_hz);
-    const double tau_ms = 1000.0 / (2.0 * std::numbers::pi * p.pole_hz());
+    // Two equal poles are -3 dB at the cut-off when each is at cutoff / sqrt(sqrt(2) - 1).
+    const double tau_ms = 1000.0 * std::sqrt(std::sqrt(2.0) - 1.0) / (2.0 * std::numbers::pi * cutoff_hz);
     // 1 - (1 + x) e^-x = 0.63 at x = 2.1462, = 0.90 at x = 3.8897: the step response of two equal poles.
     const fw::Tick step_at = 1000;
     const auto r = run(
@@ -117,7 +120,8 @@ TEST_CASE("the amplifier's noise after its filter is the input noise through the
       p.noise_n = sigma;
       // 1/(1 + s tau)^2 answers a unit held for one period h with e^(n-1) (A + B (n-1)) at conversion n >= 1,
       // e = exp(-h/tau), c = h/tau, A = 1 - e - c e, B = c (1 - e); its squares sum in closed form (q = e^2).
-      const double c = 2.0 * std::numbers::pi * p.pole_hz() / p.adc_rate_hz, e = std::exp(-c);
+      const double pole_hz = cutoff_hz / std::sqrt(std::sqrt(2.0) - 1.0);
+      const double c = 2.0 * std::numbers::pi * pole_hz / p.adc_rate_hz, e = std::exp(-c);
       const double A = 1 - e - c * e, B = c * (1 - e), q = e * e;
       const double gain =
           std::sqrt(A * A / (1 - q) + 2 * A * B * q / std::pow(1 - q, 2) + B * B * q * (1 + q) / std::pow(1 - q, 3));
