@@ -174,6 +174,7 @@ SimResult run_simulation(const SimConfig& config) {
   fw::LeverConfig hsi_fw = config.hsi_firmware, top_fw = config.top_firmware;
   hsi_fw.motion_codec = config.velocity_codec;
   top_fw.force_codec = config.force_codec;
+  if (!config.gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
   calibrate_for(hsi_fw.gauge, config.gauge);
   calibrate_for(top_fw.gauge, config.gauge);
   // Power-up angles: anywhere in the working range with homing, the operator's start angle without.

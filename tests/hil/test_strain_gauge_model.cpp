@@ -4,9 +4,11 @@
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <stdexcept>
 #include <vector>
 
 #include "lever/fw/strain_gauge.hpp"
+#include "lever/hil/simulation.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
 
 using namespace lever;
@@ -194,4 +196,18 @@ TEST_CASE("beyond its maximum output the amplifier reads at its limit, and the f
     gauge.update(40.0, 502);
     CHECK(gauge.latest()->raw == p.range_n / p.step_n);
   }
+}
+
+TEST_CASE("the simulation refuses an amplifier it cannot model", "[hil][gauge]") {
+  CHECK(StrainGaugeParams{}.valid());
+  SimConfig c;
+  c.duration_s = 0.01;
+  c.gauge.averaging = 0;
+  CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
+  c.gauge = {};
+  c.gauge.filter_hz = 400.0;  // above the 300 Hz its 600 conversions per second can carry
+  CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
+  c.gauge = {};
+  c.gauge.step_n = std::nan("");
+  CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
 }

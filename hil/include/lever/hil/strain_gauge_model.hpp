@@ -27,6 +27,12 @@ struct StrainGaugeParams {
   double max_code() const { return std::round(range_n / step_n); }
   // The pole of each of the filter's two equal real sections: -3 dB at filter_hz overall.
   double pole_hz() const { return filter_hz / std::sqrt(std::sqrt(2.0) - 1.0); }
+  // Finite, positive where it must be, the filter below the conversions' Nyquist frequency.
+  bool valid() const {
+    return std::isfinite(adc_rate_hz) && adc_rate_hz > 0.0 && std::isfinite(filter_hz) && filter_hz >= 0.0 &&
+           filter_hz < adc_rate_hz / 2 && averaging >= 1 && std::isfinite(noise_n) && noise_n >= 0.0 &&
+           std::isfinite(step_n) && step_n > 0.0 && std::isfinite(range_n) && range_n >= step_n;
+  }
 };
 
 // The firmware's calibration for this amplifier, as a board's lever-fw configuration is set for its own: codes to
