@@ -207,8 +207,18 @@ int main(int argc, char** argv) {
       ->default_str("0.02");
   sweep->add_option("--floor-force", sweep_options.floor_force, "force floor of the +floor variant, N")
       ->default_str("0.05");
-  sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
+  sweep
+      ->add_option("--filter-hz-velocity", sweep_options.filter_hz_velocity,
+                   "velocity prefilter cut-off of the filter variants, Hz (0: off); 30: beyond the 20-30 Hz of "
+                   "kinesthetic motion sensing")
+      ->check(CLI::Range(0.0, 499.0))
       ->default_str("30");
+  sweep
+      ->add_option("--filter-hz-force", sweep_options.filter_hz_force,
+                   "force prefilter cut-off of the filter variants, Hz (0: off); off: force is felt up to about "
+                   "1 kHz, beyond the loop's Nyquist")
+      ->check(CLI::Range(0.0, 499.0))
+      ->default_str("0");
 
   ServeOptions serve_options;
   auto* serve = app.add_subcommand(
