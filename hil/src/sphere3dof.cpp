@@ -257,7 +257,8 @@ void validate(const SphereConfig& c) {
     bad("invalid hand parameters");
   if (!(c.sphere.radius_m > 0.0) || !(c.sphere.stiffness > 0.0)) bad("invalid sphere");
   if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be in 1..1000");
-  if (!(c.network.delay_ms >= 0.0) || !(c.network.jitter_ms >= 0.0) || !(c.network.loss >= 0.0 && c.network.loss <= 1.0))
+  if (!(c.network.delay_ms >= 0.0) || !(c.network.jitter_ms >= 0.0) ||
+      !(c.network.loss >= 0.0 && c.network.loss <= 1.0))
     bad("invalid network parameters");
   if (!(c.jnd >= 0.0) || !(c.jnd_absolute_n >= 0.0)) bad("invalid JND");
 }
@@ -308,8 +309,8 @@ SphereResult run_sphere(const SphereConfig& c) {
   Playout<UpPacket> up_playout;
   Playout<DownPacket> down_playout;
 
-  const double mass = c.hand.mass_kg + c.device.mass_kg;
   const double h = kTick / c.substeps;
+  const double step = h / (c.hand.mass_kg + c.device.mass_kg);  // velocity change per newton and substep
   Vec3 x = explorer.start(), v{};
   Vec3 intent = x, intent_prev = x;
   Vec3 displayed{};
@@ -317,7 +318,7 @@ SphereResult run_sphere(const SphereConfig& c) {
 
   // Histories for the delayed references (the environment's force, the measured position).
   constexpr std::size_t kHistory = 1024;
-  const int max_delay = std::max(up_ticks, down_ticks);
+  const int max_delay = up_ticks + down_ticks;
   if (max_delay >= static_cast<int>(kHistory)) throw std::invalid_argument("sphere-3dof: link delay too long");
   std::array<Vec3, kHistory> force_history{}, measured_history{};
 
@@ -332,7 +333,8 @@ SphereResult run_sphere(const SphereConfig& c) {
   r.uplink_delay_ticks = up_ticks;
   r.downlink_delay_ticks = down_ticks;
   if (c.record_trace) r.trace.reserve(ticks);
-  std::uint64_t contact = 0, saturated = 0, violations = 0, zero_velocity = 0, position_samples = 0;
+  std::uint64_t contact = 0, saturated = 0, violations = 0, downlink_violations = 0, zero_velocity = 0,
+                position_samples = 0;
   double contact_force_sum = 0.0, force_sq = 0.0, position_sq = 0.0, speed_sum = 0.0;
 
   for (std::uint64_t k = 1; k <= ticks; ++k) {
@@ -348,9 +350,9 @@ SphereResult run_sphere(const SphereConfig& c) {
       const double speed = norm(v);
       const double friction = c.device.friction_n / std::max(speed, c.device.friction_linear_mps);
       for (std::size_t i = 0; i < 3; ++i) {
-        const double f = c.hand.stiffness * (intent[i] - x[i]) + c.hand.damping * (intent_speed[i] - v[i]) +
-                         shake[i] + displayed[i] - friction * v[i];
-        v[i] += f / mass * h;
+        const double f = c.hand.stiffness * (intent[i] - x[i]) + c.hand.damping * (intent_speed[i] - v[i]) + shake[i] +
+                         displayed[i] - friction * v[i];
+        v[i] += f * step;
         x[i] += v[i] * h;
       }
     }
@@ -358,7 +360,8 @@ SphereResult run_sphere(const SphereConfig& c) {
 
     // 2. The OP samples the device: quantized position, velocity by backward difference (section III-E).
     const Vec3 measured = quantize(x, c.device.resolution_m);
-    const Vec3 velocity = scale(difference(measured, measured_prev), 1.0 / kTick);
+    Vec3 velocity{};
+    for (std::size_t i = 0; i < 3; ++i) velocity[i] = (measured[i] - measured_prev[i]) / kTick;
     measured_prev = measured;
     if (velocity[0] == 0.0 && velocity[1] == 0.0 && velocity[2] == 0.0) ++zero_velocity;
     const auto vd = velocity_sender.offer(t, velocity);
@@ -424,13 +427,21 @@ SphereResult run_sphere(const SphereConfig& c) {
       contact_force_sum += force_n;
     }
     if (force_n > c.device.max_force_n) ++saturated;
-    const Vec3 reference = k > static_cast<std::uint64_t>(down_ticks)
-                               ? saturate(force_history[(k - static_cast<std::uint64_t>(down_ticks)) % kHistory],
-                                          c.device.max_force_n)
-                               : Vec3{};
+    // Against the undistorted system: eq. (11) at the position measured the round trip earlier.
+    const auto round_trip = static_cast<std::uint64_t>(up_ticks + down_ticks);
+    const Vec3 reference =
+        k > round_trip
+            ? saturate(sphere_force(c.sphere, measured_history[(k - round_trip) % kHistory]), c.device.max_force_n)
+            : Vec3{};
     const double error = norm(difference(displayed, reference));
     force_sq += error * error;
     if (error > std::max(c.jnd * norm(reference), c.jnd_absolute_n)) ++violations;
+    // Against the force the TOP computed, the downlink's delay earlier: the force direction's codec alone.
+    const auto downlink = static_cast<std::uint64_t>(down_ticks);
+    const Vec3 sent_reference =
+        k > downlink ? saturate(force_history[(k - downlink) % kHistory], c.device.max_force_n) : Vec3{};
+    const double sent_error = norm(difference(displayed, sent_reference));
+    if (sent_error > std::max(c.jnd * norm(sent_reference), c.jnd_absolute_n)) ++downlink_violations;
     if (top_has_position && k > static_cast<std::uint64_t>(up_ticks)) {
       const Vec3& then = measured_history[(k - static_cast<std::uint64_t>(up_ticks)) % kHistory];
       const double e = norm(difference(top_position, then));
@@ -439,8 +450,8 @@ SphereResult run_sphere(const SphereConfig& c) {
       ++position_samples;
     }
     if (c.record_trace)
-      r.trace.push_back({t, x, measured, velocity, vd.send, top_has_position, top_position, force, fd.send, displayed,
-                         reference});
+      r.trace.push_back(
+          {t, x, measured, velocity, vd.send, top_has_position, top_position, force, fd.send, displayed, reference});
   }
 
   const double n = static_cast<double>(ticks);
@@ -450,6 +461,7 @@ SphereResult run_sphere(const SphereConfig& c) {
   r.mean_contact_force_n = contact > 0 ? contact_force_sum / static_cast<double>(contact) : 0.0;
   r.saturated_share = static_cast<double>(saturated) / n;
   r.force_jnd_violation = static_cast<double>(violations) / n;
+  r.downlink_jnd_violation = static_cast<double>(downlink_violations) / n;
   r.force_rmse_n = std::sqrt(force_sq / n);
   r.position_rmse_m = position_samples > 0 ? std::sqrt(position_sq / static_cast<double>(position_samples)) : 0.0;
   r.zero_velocity_share = static_cast<double>(zero_velocity) / n;
