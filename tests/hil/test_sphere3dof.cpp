@@ -72,6 +72,19 @@ TEST_CASE("the device's velocity is the backward difference of its quantized pos
     CHECK(r.zero_velocity_share == 1.0);
     CHECK(r.velocity_packets == 1u);
   }
+  SECTION("a hand that holds still but trembles: the tip moves inside its cell, the velocity stays exactly zero") {
+    SphereConfig c = traced(SphereConfig{}, 2.0);
+    c.hand.explore = false;
+    const auto r = run_sphere(c);
+    int moved_in_cell = 0;
+    for (std::size_t k = 1; k < r.trace.size(); ++k) {
+      const auto& row = r.trace[k];
+      if (!same(row.measured, r.trace[k - 1].measured)) continue;
+      REQUIRE(same(row.velocity, Vec3{}));
+      if (!same(row.position, r.trace[k - 1].position)) ++moved_in_cell;
+    }
+    CHECK(moved_in_cell > 1000);  // a velocity from the true position would not be zero here
+  }
   SECTION("exploring: each sample is (q_k - q_{k-1}) / 1 ms of the quantized positions, zero when they repeat") {
     const auto r = run_sphere(traced(SphereConfig{}, 10.0));
     const double resolution = OmniParams{}.resolution_m;
