@@ -372,9 +372,9 @@ SphereResult run_sphere(const SphereConfig& c) {
     measured_history[k % kHistory] = measured;
 
     // 3. The OP displays the force the TOP sent, reconstructed on the TOP's clock the link's delay late.
-    protocol::CanFrame frame;
-    while (down.pop_arrived(t_ns, frame)) {
-      const DownPacket& p = down_table.at(frame);
+    TimedFrame arrived;
+    while (down.pop_arrived(t_ns, arrived)) {
+      const DownPacket& p = down_table.at(arrived.frame);
       if (p.t <= newest_down_t || !down_playout.push(p)) {
         ++r.stale_packets;
         continue;
@@ -388,8 +388,8 @@ SphereResult run_sphere(const SphereConfig& c) {
     displayed = saturate(reconstructed ? *reconstructed : Vec3{}, c.device.max_force_n);
 
     // 4. The TOP: the user's position from the last received position and velocity, then eq. (11).
-    while (up.pop_arrived(t_ns, frame)) {
-      const UpPacket& p = up_table.at(frame);
+    while (up.pop_arrived(t_ns, arrived)) {
+      const UpPacket& p = up_table.at(arrived.frame);
       if (p.t <= newest_up_t || !up_playout.push(p)) {
         ++r.stale_packets;
         continue;
