@@ -14,6 +14,7 @@
 #include "lever/program/parse.hpp"
 #include "report.hpp"
 #include "serve.hpp"
+#include "sphere.hpp"
 #include "sweep.hpp"
 
 namespace {
@@ -28,7 +29,8 @@ extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
 const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
                                                      {"free-motion", ScenarioKind::free_motion},
-                                                     {"press-hold", ScenarioKind::press_hold}};
+                                                     {"press-hold", ScenarioKind::press_hold},
+                                                     {"sphere-3dof", ScenarioKind::sphere_3dof}};
 const std::map<std::string, Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 const std::map<std::string, lever::fw::MotionVelocity> kMotionVelocities{
     {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
@@ -72,7 +74,8 @@ int averaging_for(double rate_hz) {
 }
 
 void add_run_options(CLI::App& cmd, RunOptions& o) {
-  cmd.add_option("--scenario", o.config.scenario, "wall-tap (the paper's task), free-motion or press-hold")
+  cmd.add_option("--scenario", o.config.scenario,
+                 "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
       ->transform(CLI::CheckedTransformer(kScenarios))
       ->default_str("wall-tap");
   cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
@@ -253,8 +256,18 @@ int main(int argc, char** argv) {
       ->default_str("0.02");
   sweep->add_option("--floor-force", sweep_options.floor_force, "force floor of the +floor variant, N")
       ->default_str("0.05");
-  sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
+  sweep
+      ->add_option("--filter-hz-velocity", sweep_options.filter_hz_velocity,
+                   "velocity prefilter cut-off of the filter variants, Hz (0: off); 30: beyond the 20-30 Hz of "
+                   "kinesthetic motion sensing")
+      ->check(CLI::Range(0.0, 499.0))
       ->default_str("30");
+  sweep
+      ->add_option("--filter-hz-force", sweep_options.filter_hz_force,
+                   "force prefilter cut-off of the filter variants, Hz (0: off); off: force is felt up to about "
+                   "1 kHz, beyond the loop's Nyquist")
+      ->check(CLI::Range(0.0, 499.0))
+      ->default_str("0");
 
   ServeOptions serve_options;
   auto* serve = app.add_subcommand(
@@ -293,6 +306,8 @@ int main(int argc, char** argv) {
   try {
     if (run->parsed()) {
       const SimConfig config = finish(run_options);
+      if (config.scenario == ScenarioKind::sphere_3dof)
+        return run_sphere_command(sphere_config_from(config), run_options.json, run_options.trace);
       const SimResult result = run_simulation(config);
       if (!run_options.trace.empty()) write_trace(run_options.trace, result);
       if (run_options.json) {
@@ -303,10 +318,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (serve->parsed()) {
+      if (serve_options.scenario == ScenarioKind::sphere_3dof)
+        throw std::invalid_argument("serve plays the levers' world; sphere-3dof has no levers (use run)");
       std::signal(SIGINT, on_stop_signal);
       std::signal(SIGTERM, on_stop_signal);
       return run_serve(serve_options, g_stop);
     }
+    if (sweep_options.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(sweep_options);
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {
     fmt::print(stderr, "lever-hil: {}\n", e.what());

@@ -37,6 +37,8 @@ std::string scenario_name(ScenarioKind kind) {
       return "free-motion";
     case ScenarioKind::press_hold:
       return "press-hold";
+    case ScenarioKind::sphere_3dof:
+      return "sphere-3dof";
   }
   return "?";
 }

@@ -104,9 +104,11 @@ int run_sweep(const SweepOptions& o) {
       c.scenario = o.scenario;
       c.duration_s = o.duration_s;
       c.seed = job.seed;
-      const double cutoff = job.variant->filter ? o.filter_hz : 0.0;
-      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0, cutoff};
-      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0, cutoff};
+      const bool filter = job.variant->filter;
+      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
+                          filter ? o.filter_hz_velocity : 0.0};
+      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
+                       filter ? o.filter_hz_force : 0.0};
       job.result = run_simulation(c);
       const std::size_t finished = ++done;
       std::lock_guard lock(print);

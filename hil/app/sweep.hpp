@@ -13,7 +13,12 @@ struct SweepOptions {
   int jobs = 2;
   double floor_velocity = 0.02;
   double floor_force = 0.05;
-  double filter_hz = 30.0;
+  // The prefilter's cut-off per direction, for the filter variants; each beyond the perception range of its
+  // modality (the paper's III-E): kinesthetic sensing of motion reaches about 20-30 Hz, so velocity is filtered
+  // at 30 Hz; force is felt as vibration up to about 1 kHz (Pacinian corpuscles, most sensitive near 250 Hz),
+  // beyond the loop's 500 Hz Nyquist, so any cut-off the 1 kHz loop can have removes what can be felt: off.
+  double filter_hz_velocity = 30.0;
+  double filter_hz_force = 0.0;
 };
 
 int run_sweep(const SweepOptions& options);

@@ -97,13 +97,19 @@ struct Transport {
 
   void service(Nanos from, Nanos now) {
     for (Nanos s = from + step;; s += step) {
-      if (s > now) s = now;
+      if (s > now || quiet()) s = now;  // nothing in flight: no frame can reach a bridge before now
       hsi_bus->advance_to(s);
       if (top_bus != hsi_bus) top_bus->advance_to(s);
       for (Bridge* b : bridges)
         if (b) b->pump(s);
       if (s == now) break;
     }
+  }
+  bool quiet() const {
+    if (!hsi_bus->idle() || !top_bus->idle()) return false;
+    for (const Bridge* b : bridges)
+      if (b && b->incoming->in_flight()) return false;
+    return true;
   }
 };
 

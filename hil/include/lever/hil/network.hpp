@@ -33,6 +33,7 @@ class NetworkLink {
   void set_extra_delay_ms(double ms) { extra_delay_ms_ = ms; }
   void set_burst_loss(double loss) { burst_loss_ = loss; }  // on top of the base loss
 
+  bool in_flight() const { return size_ > 0; }
   const Stats& stats() const { return stats_; }
 
  private:
