@@ -186,7 +186,10 @@ std::uint16_t port_of(const platform::SocketAddress& a) {
                                      : reinterpret_cast<const sockaddr_in6*>(&a.storage)->sin6_port);
 }
 
-std::string cut(const std::string& s) { return s.size() > 80 ? s.substr(0, 77) + "..." : s; }
+// A value echoed into a one-line message, cut short.
+std::string cut(const std::string& s, std::size_t limit = 80) {
+  return s.size() > limit ? s.substr(0, limit - 3) + "..." : s;
+}
 
 }  // namespace
 
@@ -205,9 +208,9 @@ void validate(const BridgeConfig& c) {
   }
   std::string error;
   const auto bind = platform::parse_socket_address(c.bind, error);
-  if (!bind) throw fail("bind " + cut(error));
+  if (!bind) throw fail("bind " + cut(error, 200));
   const auto peer = platform::parse_socket_address(c.peer, error);
-  if (!peer) throw fail("peer " + cut(error));
+  if (!peer) throw fail("peer " + cut(error, 200));
   if (port_of(*bind) == 0) {
     throw fail(fmt::format("bind '{}': port 0 would be a random port, which the peer cannot know", cut(c.bind)));
   }
