@@ -1,0 +1,171 @@
+#!/usr/bin/env bash
+# lever-bridge as a user runs it, on bad input above all: exit code (0, 1 runtime, 2 bad input), the message, and
+# what is left on disk, for keys (keygen --out, key files), --check-config, the TOML file, the command line, the
+# addresses, and a machine without a CAN stack or interface. Nothing here opens a CAN interface successfully: the
+# relay itself is tested in the kernel rig (tests/kernel/bridge_*.sh).
+# usage: lever_bridge_cli.sh path/to/lever-bridge
+set -uo pipefail
+bridge=$(realpath "$1")
+source "$(dirname "$0")/lib.sh"
+bad_cases=0
+mkdir -p "$work/io"  # stdout and stderr of each run, outside what the disk checks look at
+snapshot() { (cd "$work" && find . \( -path ./run -o -path ./io \) -prune -o -printf '%p %s %m %T@\n' | sort); }
+run() {  # run ARGS...: in $work/run, never more than 10 s; sets code
+  mkdir -p "$work/run"
+  (cd "$work/run" && timeout 10 "$bridge" "$@" >"$work/io/out" 2>"$work/io/err")
+  code=$?
+}
+expect() {  # expect CODE NAME EXPECTED_MESSAGE ARGS...: exit code, message, and nothing new or changed on disk
+  local want=$1 name=$2 expected=$3; shift 3
+  [[ $want -eq 2 ]] && bad_cases=$((bad_cases + 1))
+  local before; before=$(snapshot)
+  run "$@"
+  check "$name: exit code $want (got $code)" test "$code" -eq "$want"
+  check "$name: says '$expected'" grep -qF -- "$expected" "$work/io/err"
+  check "$name: one line" test "$(wc -l <"$work/io/err")" -le 2
+  check "$name: leaves the disk as it was" test "$before" == "$(snapshot)"
+  check "$name: nothing in the working directory" test -z "$(ls -A "$work/run")"
+}
+expect_bad() { expect 2 "$@"; }
+ok() { check "$1: exit code 0 (got $code; $(head -c 300 "$work/io/err"))" test "$code" -eq 0; }
+
+key=$work/site.key
+net=(--can vcan0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001)
+
+# ---- Help and exit codes ----
+run --help; ok "--help"
+check "--help documents the exit codes" grep -q "2 bad input" "$work/io/out"
+check "--help documents --check-config and --peer-site-id" grep -q -- "--peer-site-id" "$work/io/out"
+run keygen --help; ok "keygen --help"
+check "keygen --help documents --out" grep -q -- "--out" "$work/io/out"
+expect_bad "an unknown option" "--frobnicate" --frobnicate
+expect_bad "a misspelt subcommand" "keygn" keygn
+
+# ---- Keys ----
+run keygen --out "$key"; ok "keygen --out"
+check "keygen --out: mode 0600" test "$(stat -c %a "$key")" = 600
+check "keygen --out: 64 hex digits and a newline" grep -qxE '[0-9a-f]{64}' "$key"
+check "keygen --out: 65 bytes" test "$(stat -c %s "$key")" -eq 65
+check "keygen --out: the key loads" bash -c "'$bridge' ${net[*]} --key '$key' --check-config >/dev/null"
+sum=$(sha256sum <"$key")
+expect_bad "keygen --out an existing key" "never overwritten" keygen --out "$key"
+check "the existing key is untouched" test "$sum" == "$(sha256sum <"$key")"
+expect_bad "keygen --out in a missing directory" "No such file or directory" keygen --out "$work/none/site.key"
+mkdir -p "$work/dir"
+expect_bad "keygen --out a directory" "exists" keygen --out "$work/dir"
+ln -s "$work/target.key" "$work/link.key"
+expect_bad "keygen --out a dangling symlink" "exists" keygen --out "$work/link.key"
+check "nothing created at the symlink's target" test ! -e "$work/target.key"
+expect_bad "keygen --out /dev/null" "never overwritten" keygen --out /dev/null
+check "/dev/null is still a character device" test -c /dev/null
+(umask 000 && "$bridge" keygen --out "$work/umask.key" 2>/dev/null)
+check "keygen --out under umask 000: still mode 0600" test "$(stat -c %a "$work/umask.key")" = 600
+run keygen; ok "keygen to stdout"
+check "keygen to stdout: one key" grep -qxE '[0-9a-f]{64}' "$work/io/out"
+run keygen --out -; ok "keygen --out -"
+check "keygen --out -: stdout" grep -qxE '[0-9a-f]{64}' "$work/io/out"
+
+cp "$key" "$work/open.key" && chmod 644 "$work/open.key"
+expect_bad "a key readable by others" "chmod 600" "${net[@]}" --key "$work/open.key" --check-config
+expect_bad "a missing key file" "cannot open: No such file" "${net[@]}" --key "$work/none.key" --check-config
+(umask 077 && printf '%064d\n' 0 >"$work/zero.key")
+expect_bad "an all-zero key" "all zeros" "${net[@]}" --key "$work/zero.key" --check-config
+(umask 077 && printf '%s\r\n' "$(head -c 64 "$key")" >"$work/crlf.key")
+expect_bad "a key with a CRLF ending" "carriage return" "${net[@]}" --key "$work/crlf.key" --check-config
+expect_bad "a directory as key" "not a regular file" "${net[@]}" --key "$work/dir" --check-config
+expect_bad "no key" "--key is required" "${net[@]}" --check-config
+expect_bad "--insecure with --key" "exclude each other" "${net[@]}" --key "$key" --insecure --check-config
+
+# ---- --check-config: validates, opens nothing ----
+# 192.0.2.1 (TEST-NET-1) is no address of this machine: binding it would fail, so success shows nothing was opened.
+run --can vcan0 --bind 192.0.2.1:5000 --peer 192.0.2.7:5000 --key "$key" --check-config; ok "--check-config"
+check "--check-config: says valid" grep -q "configuration valid" "$work/io/out"
+mkdir -p "$work/etc"
+cp "$key" "$work/etc/site.key"
+printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n' >"$work/etc/bridge.toml"
+run --config "$work/etc/bridge.toml" --check-config; ok "a config file with a key relative to it, from elsewhere"
+check "the key was found next to the config" grep -qF "$work/etc/site.key" "$work/io/out"
+printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "other.key"\n' >"$work/etc/other.toml"
+expect_bad "a relative key missing next to the config" "$work/etc/other.key" --config "$work/etc/other.toml" --check-config
+printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\nrealtime_priority = 70\npeer_site_id = 2\nsite_id = 1\n' \
+  >"$work/etc/rt.toml"
+run --config "$work/etc/rt.toml" --check-config; ok "realtime_priority, site_id and peer_site_id as TOML keys"
+expect_bad "a missing config file" "bridge-none.toml" --config "$work/bridge-none.toml" --check-config
+
+# ---- The TOML file: each value refused at load, naming the key and the value ----
+toml_bad() {  # toml_bad NAME MESSAGE LINE
+  printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n%s\n' "$3" \
+    >"$work/etc/bad.toml"
+  expect_bad "TOML: $1" "$2" --config "$work/etc/bad.toml" --check-config
+}
+toml_bad "stats_interval_s NaN" "key 'stats_interval_s': must be a time in seconds from 0.01 to 3600, got nan" "stats_interval_s = nan"
+toml_bad "probe_interval_s infinite" "key 'probe_interval_s': must be a time in seconds from 0.01 to 3600, got inf" "probe_interval_s = inf"
+toml_bad "probe_interval_s 0" "got 0" "probe_interval_s = 0"
+toml_bad "record_keep_files fractional" "key 'record_keep_files': must be an integer from 1 to 1000, got 2.5" "record_keep_files = 2.5"
+toml_bad "record_keep_files NaN" "key 'record_keep_files': must be an integer from 1 to 1000, got nan" "record_keep_files = nan"
+toml_bad "can_bitrate fractional" "key 'can_bitrate': must be an integer from 10000 to 1000000, got 500000.5" "can_bitrate = 500000.5"
+toml_bad "can_bitrate NaN" "key 'can_bitrate'" "can_bitrate = nan"
+toml_bad "site_id fractional" "key 'site_id': must be an integer from 0 to 255, got 2.5" "site_id = 2.5"
+toml_bad "site_id 300" "got 300" "site_id = 300"
+toml_bad "peer_site_id negative" "key 'peer_site_id': must be an integer from 0 to 255, got -1" "peer_site_id = -1"
+toml_bad "site_id equal to peer_site_id" "site_id and peer_site_id are both 4" $'site_id = 4\npeer_site_id = 4'
+toml_bad "realtime_priority 0" "key 'realtime_priority': must be an integer from 1 to 99, got 0" "realtime_priority = 0"
+toml_bad "record_rotate_mb huge" "key 'record_rotate_mb'" "record_rotate_mb = 1e300"
+toml_bad "record_rotate_mb NaN" "got nan" "record_rotate_mb = nan"
+toml_bad "stats_json a string" "key 'stats_json': expected true or false, got 'yes'" 'stats_json = "yes"'
+toml_bad "an unknown key" "key 'realtime': unknown key" "realtime = 1"
+toml_bad "an empty allow-list" "key 'allow': must not be empty" 'allow = ""'
+toml_bad "an id beyond 11 bits" "beyond 11 bits" 'allow_to_network = "0x800"'
+toml_bad "an empty record path" "key 'record': must not be empty" 'record = ""'
+toml_bad "a syntax error" "bad.toml:5" "stats_json = "
+printf 'can = ""\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n' >"$work/etc/bad.toml"
+expect_bad "TOML: an empty interface" "key 'can': must not be empty" --config "$work/etc/bad.toml" --check-config
+printf 'can = 5\n' >"$work/etc/bad.toml"
+expect_bad "TOML: a number for a string" "key 'can': expected a string, got 5" --config "$work/etc/bad.toml" --check-config
+printf 'peer = "127.0.0.1:0"\ncan = "vcan0"\nbind = "127.0.0.1:5000"\nkey = "site.key"\n' >"$work/etc/bad.toml"
+expect_bad "TOML: peer port 0" "peer '127.0.0.1:0': port 0" --config "$work/etc/bad.toml" --check-config
+
+# ---- The command line ----
+expect_bad "--allow empty" "--allow: allow-list is empty" "${net[@]}" --key "$key" --allow ""
+expect_bad "--allow beyond 11 bits" "--allow: allow-list item '0x900'" "${net[@]}" --key "$key" --allow 0x900
+expect_bad "--record empty" "--record: the path is empty" "${net[@]}" --key "$key" --record ""
+expect_bad "--key empty" "--key: the path is empty" "${net[@]}" --key ""
+expect_bad "--site-id fractional" "--site-id" "${net[@]}" --key "$key" --site-id 2.5
+expect_bad "--site-id 256" "--site-id" "${net[@]}" --key "$key" --site-id 256
+expect_bad "--peer-site-id the own site id" "both 3" "${net[@]}" --key "$key" --site-id 3 --peer-site-id 3
+expect_bad "--realtime-priority 0" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority 0
+expect_bad "--realtime-priority nan" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority nan
+expect_bad "--can missing" "--can (key 'can') is required" --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
+expect_bad "--can too long" "not an interface name" --can a-name-far-too-long --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
+expect_bad "--can with a slash" "not an interface name" --can ../can0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
+
+# ---- Addresses ----
+addr_bad() {  # addr_bad NAME MESSAGE BIND PEER
+  expect_bad "$1" "$2" --can vcan0 --bind "$3" --peer "$4" --key "$key"
+}
+addr_bad "peer port 0" "peer '127.0.0.1:0': port 0" 127.0.0.1:5000 127.0.0.1:0
+addr_bad "bind port 0" "bind '127.0.0.1:0': port 0" 127.0.0.1:0 127.0.0.1:5001
+addr_bad "a broadcast peer" "peer '255.255.255.255:5001': a broadcast address" 0.0.0.0:5000 255.255.255.255:5001
+addr_bad "a multicast peer" "peer '239.1.2.3:5001': a multicast address" 0.0.0.0:5000 239.1.2.3:5001
+addr_bad "an IPv6 multicast peer" "a multicast address" '[::]:5000' '[ff02::1]:5001'
+addr_bad "the unspecified peer" "the unspecified address" 127.0.0.1:5000 0.0.0.0:5001
+addr_bad "a peer equal to the bind address" "this bridge's own address" 127.0.0.1:5000 127.0.0.1:5000
+addr_bad "a loopback peer on our wildcard port" "this bridge's own address" 0.0.0.0:5000 127.0.0.1:5000
+addr_bad "a multicast bind" "bind '224.0.0.1:5000': a multicast address" 224.0.0.1:5000 127.0.0.1:5001
+addr_bad "mixed families" "different address families" 127.0.0.1:5000 '[::1]:5001'
+addr_bad "a port beyond 64 bits" "port from 0 to 65535" 127.0.0.1:5000 127.0.0.1:99999999999999999999999
+addr_bad "no port" "expected HOST:PORT" 127.0.0.1:5000 127.0.0.1
+addr_bad "an IPv6 address without brackets" "expected HOST:PORT" 127.0.0.1:5000 ::1:5001
+
+# ---- Runtime failures: exit 1, a message saying what to do, nothing on disk ----
+# This machine may or may not have a kernel CAN stack; either way lvrnone0 does not exist.
+run --can lvrnone0 --bind 127.0.0.1:5123 --peer 127.0.0.1:5001 --key "$key" --record rec.log
+check "no CAN: exit 1 (got $code)" test "$code" -eq 1
+check "no CAN: says what to do (modprobe can-raw, or ip link)" grep -qE "modprobe can-raw|ip link show lvrnone0" "$work/io/err"
+check "no CAN: no recording left behind" test ! -e "$work/run/rec.log"
+run --can vcan0 --bind 192.0.2.1:5000 --peer 192.0.2.7:5000 --key "$key"
+check "binding an address this machine does not have: exit 1 (got $code)" test "$code" -eq 1
+check "and names it" grep -q "192.0.2.1:5000" "$work/io/err"
+
+echo "lever-bridge cli: $bad_cases bad-input cases (exit 2)"
+report "lever-bridge cli"
