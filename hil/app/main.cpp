@@ -28,6 +28,7 @@ extern "C" void on_stop_signal(int) { g_stop.store(true); }
 const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
                                                      {"free-motion", ScenarioKind::free_motion},
                                                      {"press-hold", ScenarioKind::press_hold}};
+const std::map<std::string, Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 const std::map<std::string, Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 
 struct RunOptions {
@@ -79,6 +80,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
       ->check(CLI::NonNegativeNumber);
   cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
       ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--topology", o.config.topology,
+                 "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
+                 "over the network)")
+      ->transform(CLI::CheckedTransformer(kTopologies))
+      ->default_str("two-sites");
   cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
       ->check(CLI::NonNegativeNumber)
       ->default_str("0");
@@ -113,6 +119,10 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
   c.homing = !o.no_homing;
+  const auto& n = c.network;
+  if (c.topology == Topology::one_site && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
+    throw std::invalid_argument(
+        "--delay-ms, --jitter-ms and --loss need --topology two-sites: one site has no network");
 
   c.record_trace = !o.trace.empty();
   return c;
@@ -135,6 +145,11 @@ void print_human(const SimConfig& c, const SimResult& r) {
              100 * r.force_packet_rate);
   fmt::print("  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
+  fmt::print(
+      "  by cause: {:.1f} % beside the measurement {} tick(s) earlier (codec, filter, loss, jitter); codec alone "
+      "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
+      100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
+      100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
   fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);

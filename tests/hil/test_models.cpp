@@ -76,9 +76,9 @@ TEST_CASE("the link delays, loses and reorders as configured, reproducibly", "[h
     NetworkLink link(p, seed);
     std::vector<std::uint32_t> arrived;
     for (int i = 0; i < 10000; ++i) link.send(frame(static_cast<std::uint32_t>(i % 0x7FF)), i * 100'000LL);
-    protocol::CanFrame f;
+    TimedFrame f;
     for (Nanos t = 0; t < 2'000'000'000LL; t += 100'000)
-      while (link.pop_arrived(t, f)) arrived.push_back(f.id);
+      while (link.pop_arrived(t, f)) arrived.push_back(f.frame.id);
     return std::make_pair(link.stats(), arrived);
   };
   const auto [lossy, lossy_ids] = run({5.0, 0.0, 0.1, true}, 1);
@@ -95,9 +95,10 @@ TEST_CASE("the link delays, loses and reorders as configured, reproducibly", "[h
 TEST_CASE("a datagram arrives after the configured delay", "[hil][network]") {
   NetworkLink link({20.0, 0.0, 0.0, true}, 1);
   link.send(frame(0x100), 1'000'000);
-  protocol::CanFrame f;
+  TimedFrame f;
   CHECK_FALSE(link.pop_arrived(20'999'999, f));
   CHECK(link.pop_arrived(21'000'000, f));
+  CHECK(f.time == 21'000'000);  // its arrival time, for the bridge's own timestamp
   link.set_down(true);
   link.send(frame(0x100), 30'000'000);
   CHECK_FALSE(link.pop_arrived(100'000'000, f));

@@ -25,8 +25,8 @@ class NetworkLink {
   NetworkLink(const NetworkParams& p, std::uint64_t seed) : p_(p), rng_(seed) {}
 
   void send(const protocol::CanFrame& f, Nanos t);
-  // The next datagram that has arrived by t, in arrival order.
-  bool pop_arrived(Nanos t, protocol::CanFrame& f);
+  // The next datagram that has arrived by t, in arrival order, with its arrival time.
+  bool pop_arrived(Nanos t, TimedFrame& f);
 
   // Fault injection.
   void set_down(bool down) { down_ = down; }  // every datagram lost
