@@ -4,8 +4,11 @@
 #include <fmt/format.h>
 #include <net/if.h>
 #include <netinet/in.h>
+#include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 
 #include "lever/platform/udp_socket.hpp"
 
@@ -191,6 +194,42 @@ std::string cut(const std::string& s, std::size_t limit = 80) {
   return s.size() > limit ? s.substr(0, limit - 3) + "..." : s;
 }
 
+const char* file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// The recording appends to a regular file of its own and renames it when it rotates: a device, a symlink, a
+// directory or the key itself must never be that file.
+void check_record_path(const std::filesystem::path& record, const std::filesystem::path& key_file) {
+  const std::string shown_path = cut(record.string());
+  struct stat st {};
+  if (::lstat(record.c_str(), &st) == 0) {
+    if (!S_ISREG(st.st_mode)) {
+      throw std::invalid_argument(fmt::format("record '{}': {}; the recording is a regular file of its own", shown_path,
+                                              file_kind(st.st_mode)));
+    }
+    struct stat key {};
+    if (!key_file.empty() && ::stat(key_file.c_str(), &key) == 0 && key.st_dev == st.st_dev &&
+        key.st_ino == st.st_ino) {
+      throw std::invalid_argument(fmt::format("record '{}' is the key file", shown_path));
+    }
+    return;
+  }
+  if (errno != ENOENT) {
+    throw std::invalid_argument(fmt::format("record '{}': {}", shown_path, std::strerror(errno)));
+  }
+  const auto parent = record.has_parent_path() ? record.parent_path() : std::filesystem::path(".");
+  if (::stat(parent.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    throw std::invalid_argument(
+        fmt::format("record '{}': the directory '{}' does not exist", shown_path, cut(parent.string())));
+  }
+}
+
 }  // namespace
 
 void validate(const BridgeConfig& c) {
@@ -234,6 +273,7 @@ void validate(const BridgeConfig& c) {
     throw fail(fmt::format("site_id and peer_site_id are both {}: each end needs its own id", *c.site_id));
   }
   if (c.record && c.record->empty()) throw fail("record: the path is empty");
+  if (c.record) check_record_path(*c.record, c.key_file);
 }
 
 }  // namespace lever::bridge

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "allow_list.hpp"
@@ -134,6 +135,12 @@ int main(int argc, char** argv) {
     config.stats_json = config.stats_json || stats_json;
     config.insecure = insecure;  // only ever from the command line, where it is explicit
     validate(config);
+    if (config.record && !config_file.empty()) {
+      std::error_code ec;
+      if (std::filesystem::equivalent(*config.record, config_file, ec)) {
+        return fail(kBadInput, fmt::format("record '{}' is the configuration file", config.record->string()));
+      }
+    }
     if (config.insecure) {
       if (!config.key_file.empty()) return fail(kBadInput, "--insecure and --key exclude each other");
       fmt::print(stderr,

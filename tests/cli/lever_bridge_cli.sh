@@ -142,6 +142,19 @@ expect_bad "--can missing" "--can (key 'can') is required" --bind 127.0.0.1:5000
 expect_bad "--can too long" "not an interface name" --can a-name-far-too-long --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
 expect_bad "--can with a slash" "not an interface name" --can ../can0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
 
+# ---- The recording: a regular file of its own, never a device, a directory, a symlink, the key or the config ----
+expect_bad "--record a directory" "record '$work/dir': a directory" "${net[@]}" --key "$key" --record "$work/dir"
+expect_bad "--record a FIFO" "a FIFO" "${net[@]}" --key "$key" --record "$work/fifo"
+expect_bad "--record /dev/null" "record '/dev/null': a device" "${net[@]}" --key "$key" --record /dev/null
+ln -s "$work/elsewhere.log" "$work/record-link.log"
+expect_bad "--record a symlink" "a symbolic link" "${net[@]}" --key "$key" --record "$work/record-link.log"
+expect_bad "--record in a missing directory" "the directory '$work/none' does not exist" "${net[@]}" --key "$key" \
+  --record "$work/none/a.log"
+expect_bad "--record the key file" "is the key file" "${net[@]}" --key "$key" --record "$key"
+expect_bad "record the configuration file" "is the configuration file" --config "$work/etc/bridge.toml" \
+  --record "$work/etc/bridge.toml"
+check "the key is still the key" test "$sum" == "$(sha256sum <"$key")"
+
 # ---- Addresses ----
 addr_bad() {  # addr_bad NAME MESSAGE BIND PEER
   expect_bad "$1" "$2" --can vcan0 --bind "$3" --peer "$4" --key "$key"
