@@ -2,7 +2,7 @@
 # Runs inside the kernel rig: an attacker on the path between two lever-bridges records what A sends B, B restarts,
 # and the recording is replayed at the new B. Nothing of it may reach B's bus: the restarted B has an empty replay
 # window, and only the epoch its datagrams carry (docs/datagram-format.md, "Restarts") tells the recording apart.
-# Genuine traffic after the restart still flows.
+# Genuine traffic after the restart still flows. Last, B refuses datagrams from a site other than its configured peer.
 #   A (vcan0, :5000) -> proxy (:5100 | :5101) -> B (vcan1, :5001)
 # usage: bridge_restart_replay.sh BIN_DIR
 set -uo pipefail
@@ -53,6 +53,13 @@ cangen vcan0 -I 102 -L 8 -D i -g 5 -n 20
 sleep 0.5
 check "after the restart genuine frames flow (20 sent)" test "$(count 102)" -eq 20
 wait $proxy_pid
+
+# 4. --peer-site-id: datagrams with the key, from the peer's address, echoing B's epoch, but from site 9.
+# (Sequence numbers a day ahead of the wall clock, past A's; the probe that learns B's epoch is from site 1.)
+"$bin/lever-bridge-attack" --key "$key" --from 127.0.0.1:5101 --to 127.0.0.1:5001 --kind valid --count 10 \
+  --sender 9 --probe-sender 1 --sequence $(( $(date +%s) * 1000000 + 86400000000 )) >>"$out/attacks.txt"
+sleep 0.3
+check "another site's datagrams put nothing on B's bus" test "$(count 101)" -eq 50
 kill -TERM $bridge_a $bridge_b
 wait $bridge_b; code_b=$?
 wait $bridge_a
@@ -62,6 +69,7 @@ stat() { tail -1 "$out/b2.stats" | jq ".from_network.$1"; }
 check "the restarted B exits 0" test "$code_b" -eq 0
 check "the first replay counted as stale (got $(stat stale))" test "$(stat stale)" -ge "$captured"
 check "the second as duplicates (got $(stat duplicates))" test "$(stat duplicates)" -ge "$captured"
+check "another site's datagrams counted (got $(stat wrong_site))" test "$(stat wrong_site)" -eq 10
 check "nothing else reached B's bus" test "$(grep -cv ' 10[12]#' "$out/vcan1.log")" -eq 0
 
 finish "bridge restart replay"
