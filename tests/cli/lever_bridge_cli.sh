@@ -183,5 +183,18 @@ run --can vcan0 --bind 192.0.2.1:5000 --peer 192.0.2.7:5000 --key "$key"
 check "binding an address this machine does not have: exit 1 (got $code)" test "$code" -eq 1
 check "and names it" grep -q "192.0.2.1:5000" "$work/io/err"
 
+# ---- The documented examples (docs/bridge.md, packaging/config/bridge-example.toml), checked rather than run ----
+mkdir -p "$work/doc"
+(cd "$work/doc" && "$bridge" keygen --out site.key 2>/dev/null)
+check "docs: keygen --out site.key" test "$(stat -c %a "$work/doc/site.key")" = 600
+(cd "$work/doc" && "$bridge" --can can0 --bind 0.0.0.0:5000 --peer 192.0.2.7:5000 --key site.key --site-id 1 \
+  --peer-site-id 2 --record site-a.log --stats-json --check-config >/dev/null)
+check "docs: the bridge.md command line is valid" test $? -eq 0
+check "docs: and --check-config left no recording" test ! -e "$work/doc/site-a.log"
+example=$(dirname "$0")/../../packaging/config/bridge-example.toml
+sed "s|/etc/lever/keys/site.key|site.key|" "$example" >"$work/doc/bridge.toml"
+"$bridge" --config "$work/doc/bridge.toml" --check-config >/dev/null
+check "docs: bridge-example.toml is valid (its key next to it)" test $? -eq 0
+
 echo "lever-bridge cli: $bad_cases bad-input cases (exit 2)"
 report "lever-bridge cli"
