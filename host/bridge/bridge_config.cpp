@@ -18,6 +18,18 @@
 namespace lever::bridge {
 namespace {
 
+// Far beyond any real configuration (a few hundred bytes), and small enough to read whole.
+constexpr long long kMaxConfigBytes = 1 << 20;
+
+const char* file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "a special file";
+}
+
 // A value from the file, as the user wrote it, cut short: it is echoed into a one-line message.
 std::string shown(const toml::node& node) {
   std::string text;
@@ -41,6 +53,15 @@ std::string shown(const toml::node& node) {
 }  // namespace
 
 void load_config_file(const std::filesystem::path& file, BridgeConfig& c) {
+  // toml++ reads a directory or a device as an empty file: a wrong path would pass for an empty configuration.
+  if (struct stat st{}; ::stat(file.c_str(), &st) != 0) {
+    throw std::invalid_argument(fmt::format("{}: cannot read: {}", file.string(), std::strerror(errno)));
+  } else if (!S_ISREG(st.st_mode)) {
+    throw std::invalid_argument(fmt::format("{}: {}, not a configuration file", file.string(), file_kind(st.st_mode)));
+  } else if (st.st_size > kMaxConfigBytes) {
+    throw std::invalid_argument(fmt::format("{}: {} bytes; a configuration file is at most {}", file.string(),
+                                            static_cast<long long>(st.st_size), kMaxConfigBytes));
+  }
   toml::table t;
   try {
     t = toml::parse_file(file.string());
@@ -192,15 +213,6 @@ std::uint16_t port_of(const platform::SocketAddress& a) {
 // A value echoed into a one-line message, cut short.
 std::string cut(const std::string& s, std::size_t limit = 80) {
   return s.size() > limit ? s.substr(0, limit - 3) + "..." : s;
-}
-
-const char* file_kind(mode_t mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISLNK(mode)) return "a symbolic link";
-  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISSOCK(mode)) return "a socket";
-  return "not a regular file";
 }
 
 // The recording appends to a regular file of its own and renames it when it rotates: a device, a symlink, a

@@ -94,6 +94,14 @@ printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "
   >"$work/etc/rt.toml"
 run --config "$work/etc/rt.toml" --check-config; ok "realtime_priority, site_id and peer_site_id as TOML keys"
 expect_bad "a missing config file" "bridge-none.toml" --config "$work/bridge-none.toml" --check-config
+expect_bad "a directory as config" "$work/dir: a directory, not a configuration file" --config "$work/dir" --check-config
+expect_bad "/dev/zero as config (no hang)" "/dev/zero: a device" --config /dev/zero --check-config
+expect_bad "a FIFO as config (no hang)" "a FIFO, not a configuration file" --config "$work/fifo" --check-config
+head -c 2000000 /dev/zero | tr '\0' '#' >"$work/etc/huge.toml"
+expect_bad "a 2 MB config" "a configuration file is at most 1048576" --config "$work/etc/huge.toml" --check-config
+printf '\xef\xbb\xbfcan = "vcan0"\n' >"$work/etc/bom.toml"
+run --config "$work/etc/bom.toml" --check-config
+check "a config with a UTF-8 BOM is read (exit 2 for the missing bind, got $code)" grep -q "bind (key 'bind') is required" "$work/io/err"
 
 # ---- The TOML file: each value refused at load, naming the key and the value ----
 toml_bad() {  # toml_bad NAME MESSAGE LINE
