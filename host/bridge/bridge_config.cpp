@@ -6,11 +6,13 @@
 #include <netinet/in.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 
 #include "lever/platform/udp_socket.hpp"
+#include "shown_value.hpp"
 
 #define TOML_EXCEPTIONS 1
 #include <toml++/toml.h>
@@ -44,10 +46,7 @@ std::string shown(const toml::node& node) {
   } else {
     text = fmt::format("a {}", node.type() == toml::node_type::table ? "table" : "list");
   }
-  for (auto& c : text) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '?';
-  }
-  return text.size() > 80 ? text.substr(0, 77) + "..." : text;
+  return shown_value(text);
 }
 
 }  // namespace
@@ -92,7 +91,7 @@ void load_config_file(const std::filesystem::path& file, BridgeConfig& c) {
   for (const auto& [key, value] : t) {
     bool known = false;
     for (const auto k : kKnown) known = known || key.str() == k;
-    if (!known) throw fail(key.str().substr(0, 80), "unknown key");
+    if (!known) throw fail(shown_value(key.str()), "unknown key");
   }
   auto text = [&](std::string_view key) -> std::optional<std::string> {
     const auto node = t[key];
@@ -210,10 +209,7 @@ std::uint16_t port_of(const platform::SocketAddress& a) {
                                      : reinterpret_cast<const sockaddr_in6*>(&a.storage)->sin6_port);
 }
 
-// A value echoed into a one-line message, cut short.
-std::string cut(const std::string& s, std::size_t limit = 80) {
-  return s.size() > limit ? s.substr(0, limit - 3) + "..." : s;
-}
+std::string cut(const std::string& s, std::size_t limit = 80) { return shown_value(s, limit); }
 
 // The recording appends to a regular file of its own and renames it when it rotates: a device, a symlink, a
 // directory or the key itself must never be that file.
@@ -251,11 +247,13 @@ void validate(const BridgeConfig& c) {
   }
   const auto bad_name = [](const std::string& n) {
     return n.size() >= IFNAMSIZ || n == "." || n == ".." ||
-           n.find_first_of(std::string_view("/: \t\n\0", 6)) != std::string::npos;
+           n.find_first_of(std::string_view("/: \t\n\0", 6)) != std::string::npos ||
+           std::any_of(n.begin(), n.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7F; });
   };
   if (bad_name(c.can_interface)) {
-    throw fail(fmt::format("can '{}': not an interface name (at most {} characters, no '/', ':' or spaces)",
-                           cut(c.can_interface), IFNAMSIZ - 1));
+    throw fail(fmt::format(
+        "can '{}': not an interface name (at most {} characters, no '/', ':', spaces or control characters)",
+        cut(c.can_interface), IFNAMSIZ - 1));
   }
   std::string error;
   const auto bind = platform::parse_socket_address(c.bind, error);

@@ -16,6 +16,7 @@
 #include "key.hpp"
 #include "lever/program/parse.hpp"
 #include "relay.hpp"
+#include "shown_value.hpp"
 
 namespace {
 
@@ -138,7 +139,8 @@ int main(int argc, char** argv) {
     if (config.record && !config_file.empty()) {
       std::error_code ec;
       if (std::filesystem::equivalent(*config.record, config_file, ec)) {
-        return fail(kBadInput, fmt::format("record '{}' is the configuration file", config.record->string()));
+        return fail(kBadInput,
+                    fmt::format("record '{}' is the configuration file", shown_value(config.record->string())));
       }
     }
     if (config.insecure) {

@@ -11,6 +11,8 @@
 #include <cerrno>
 #include <system_error>
 
+#include "shown_value.hpp"
+
 namespace lever::bridge {
 
 static_assert(kKeySize == crypto_auth_hmacsha512256_KEYBYTES);
@@ -132,7 +134,7 @@ Key parse_key(std::string_view text, std::string_view origin) {
 }
 
 Key load_key_file(const std::filesystem::path& path) {
-  const std::string name = path.string();
+  const std::string name = shown_value(path.string(), 200);
   FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK));
   if (fd.get() < 0) {
     const int error = errno;
@@ -172,7 +174,7 @@ Key load_key_file(const std::filesystem::path& path) {
 }
 
 void write_key_file(const std::filesystem::path& path, const Key& key) {
-  const std::string name = path.string();
+  const std::string name = shown_value(path.string(), 200);
   FileDescriptor fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600));
   if (fd.get() < 0) {
     const int error = errno;

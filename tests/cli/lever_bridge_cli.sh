@@ -163,6 +163,17 @@ expect_bad "record the configuration file" "is the configuration file" --config 
   --record "$work/etc/bridge.toml"
 check "the key is still the key" test "$sum" == "$(sha256sum <"$key")"
 
+# ---- Long and unprintable values: echoed cut short and with control bytes as '?' ----
+big=$(head -c 100000 /dev/zero | tr '\0' x)
+expect_bad "a 100 kB --allow" "allow-list item 'xxx" "${net[@]}" --key "$key" --allow "0x1,$big"
+check "a 100 kB --allow: a short message (got $(wc -c <"$work/io/err") bytes)" test "$(wc -c <"$work/io/err")" -lt 300
+expect_bad "a 100 kB --key" "cannot open" "${net[@]}" --key "$big"
+check "a 100 kB --key: a short message (got $(wc -c <"$work/io/err") bytes)" test "$(wc -c <"$work/io/err")" -lt 400
+expect_bad "a 100 kB --peer" "peer '" --can vcan0 --bind 127.0.0.1:5000 --peer "$big:1" --key "$key"
+check "a 100 kB --peer: a short message (got $(wc -c <"$work/io/err") bytes)" test "$(wc -c <"$work/io/err")" -lt 400
+expect_bad "an escape sequence in --can" "can 'a?[31mb'" --can $'a\e[31mb' --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
+check "no control byte reaches the terminal" bash -c "! grep -qP '\\x1b' '$work/io/err'"
+
 # ---- Addresses ----
 addr_bad() {  # addr_bad NAME MESSAGE BIND PEER
   expect_bad "$1" "$2" --can vcan0 --bind "$3" --peer "$4" --key "$key"
