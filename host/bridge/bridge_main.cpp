@@ -64,11 +64,13 @@ int main(int argc, char** argv) {
       "Relays CAN frames between a SocketCAN interface and a peer lever-bridge over UDP (IPv4 or IPv6). Every\n"
       "frame goes out at once, authenticated with HMAC-SHA-512/256 under a pre-shared key; datagrams from other\n"
       "addresses, forged, tampered, replayed or sent before this bridge started are dropped and counted; an\n"
-      "allow-list per direction keeps other ids off both sides. SIGINT/SIGTERM flush the recording and exit 0."};
+      "allow-list per direction keeps other ids off both sides. SIGINT, SIGTERM and SIGHUP flush the recording\n"
+      "and exit 0."};
   app.name("lever-bridge");
   app.footer(
-      "Exit status: 0 success (also after SIGINT or SIGTERM); 1 runtime failure (the CAN interface, the socket, the\n"
-      "recording, real-time scheduling); 2 bad input (an option, the configuration file or the key file).");
+      "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
+      "socket, the recording, real-time scheduling); 2 bad input (an option, the configuration file, the key file,\n"
+      "keygen --out naming an existing file or a missing directory).");
   std::string config_file;
   std::optional<std::string> can, bind, peer, key_file, allow, record;
   std::optional<int> site_id, peer_site_id, realtime_priority;
@@ -165,11 +167,13 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  // SIGINT and SIGTERM are taken by the relay's signalfd; block them before any thread (the recorder's) starts.
+  // SIGINT, SIGTERM and SIGHUP are taken by the relay's signalfd: block them before any thread (the recorder's)
+  // starts.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   Relay relay;

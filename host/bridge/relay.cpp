@@ -91,6 +91,7 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
   signal_fd_.reset(::signalfd(-1, &signals, SFD_NONBLOCK | SFD_CLOEXEC));
   timer_fd_.reset(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   if (!signal_fd_ || !timer_fd_) {
@@ -378,7 +379,7 @@ int Relay::run() {
       fmt::print(stderr, "lever-bridge: poll: {}\n", std::strerror(errno));
       return 1;
     }
-    if (fds[0].revents & POLLIN) break;  // SIGINT or SIGTERM
+    if (fds[0].revents & POLLIN) break;  // SIGINT, SIGTERM or SIGHUP
     if (fds[3].revents & (POLLIN | POLLERR)) relay_can_to_network();
     if (fds[2].revents & POLLIN) relay_network_to_can();
     if (fds[2].revents & POLLERR) counters_.peer_unreachable += static_cast<std::uint64_t>(udp_->drain_errors());

@@ -20,7 +20,7 @@ class Relay {
  public:
   // Everything that can fail at start-up fails here, with a message: returns false and sets `error`.
   bool start(const BridgeConfig& config, const Key& key, std::string& error);
-  // Runs until SIGINT or SIGTERM (which must be blocked in every thread before start()). Returns the exit code.
+  // Runs until SIGINT, SIGTERM or SIGHUP (blocked in every thread before start()). Returns the exit code.
   int run();
 
   const BridgeCounters& counters() const { return counters_; }
