@@ -29,6 +29,8 @@ const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::
                                                      {"free-motion", ScenarioKind::free_motion},
                                                      {"press-hold", ScenarioKind::press_hold}};
 const std::map<std::string, Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
+const std::map<std::string, lever::fw::MotionVelocity> kMotionVelocities{
+    {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
 const std::map<std::string, Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 
 struct RunOptions {
@@ -67,6 +69,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--p-velocity", o.p_velocity, "p for HSI->TOP velocity (overrides --p)")
       ->check(CLI::NonNegativeNumber);
   cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")->check(CLI::NonNegativeNumber);
+  cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
+                 "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
+                 "estimate (its smooth velocity estimate)")
+      ->transform(CLI::CheckedTransformer(kMotionVelocities))
+      ->default_str("difference");
   cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
       ->check(CLI::NonNegativeNumber)
       ->default_str("0");

@@ -149,6 +149,7 @@ fw::LeverConfig SimConfig::default_firmware(protocol::Role role) {
   fw::LeverConfig c;
   c.role = role;
   c.use_force_sensor = role == protocol::Role::top;
+  c.motion_velocity = fw::MotionVelocity::difference;  // the paper's chain (III-E)
   return c;
 }
 
