@@ -38,7 +38,6 @@ check "the proxy recorded A's datagrams (got ${captured:-0})" test "${captured:-
 # 2. B restarts; the recording is replayed at it from its peer's address, twice.
 kill -HUP $bridge_b; wait $bridge_b; code_b1=$?  # a closed terminal or session: the same clean stop as SIGTERM
 check "B's first run exits 0 on SIGHUP (got $code_b1)" test "$code_b1" -eq 0
-check "and prints its last statistics" test "$(tail -1 "$out/b1.stats" | jq .from_network.frames)" -eq 50
 start_b 2
 sleep 1
 "$bin/lever-bridge-attack" --kind replay-capture --from 127.0.0.1:5101 --to 127.0.0.1:5001 \
