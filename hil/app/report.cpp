@@ -88,6 +88,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"bus_load_top", r.bus_load_top},
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
+      {"contact_onsets_per_s", r.contact_onsets_per_s},
       {"armed_s", static_cast<double>(r.armed_ticks) * 1e-3},
       {"frames", {{"motion", r.motion_frames}, {"force", r.force_frames}}},
       {"network", {{"datagrams", r.network_sent}, {"lost", r.network_lost}, {"reordered", r.network_reordered}}},

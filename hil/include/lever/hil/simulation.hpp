@@ -104,6 +104,7 @@ struct SimResult {
   double prefilter_delay_ms = 0.0;    // the force prefilter's group delay at low frequencies, 1 / (2 pi f_c)
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
+  double contact_onsets_per_s = 0.0;  // the TOP's wall contact beginning, per armed second (RunMetrics)
   double bus_load_hsi = 0.0, bus_load_top = 0.0;
   std::uint64_t armed_ticks = 0;
   std::uint64_t motion_frames = 0, force_frames = 0;
