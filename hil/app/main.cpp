@@ -34,6 +34,9 @@ const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::
 const std::map<std::string, Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 const std::map<std::string, lever::fw::MotionVelocity> kMotionVelocities{
     {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
+const std::map<std::string, lever::fw::PassivityMode> kPassivity{{"off", lever::fw::PassivityMode::off},
+                                                                 {"observe", lever::fw::PassivityMode::observe},
+                                                                 {"tdpa", lever::fw::PassivityMode::tdpa}};
 const std::map<std::string, Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 
 struct RunOptions {
@@ -45,6 +48,7 @@ struct RunOptions {
   double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
   double comms_timeout_ms = static_cast<double>(lever::fw::LeverConfig{}.comms_timeout);
   bool no_homing = false;
+  lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -130,6 +134,10 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
       ->check(CLI::Range(1.0, 10000.0))
       ->default_str(std::to_string(lever::fw::LeverConfig{}.comms_timeout));
+  cmd.add_option("--passivity", o.passivity,
+                 "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
+      ->transform(CLI::CheckedTransformer(kPassivity))
+      ->default_str("off");
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
                "random angle, homed against the end stop before the scenario)");
@@ -172,6 +180,8 @@ SimConfig finish(RunOptions& o) {
                    o.filter_hz_force.value_or(o.filter_hz)};
   c.hsi_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
+  c.hsi_firmware.passivity.mode = o.passivity;
+  c.top_firmware.passivity.mode = o.passivity;
   for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);

@@ -27,6 +27,18 @@ nlohmann::json reaction_json(const FaultReport::LeverReaction& r, double injecte
   return j;
 }
 
+std::string passivity_name(fw::PassivityMode mode) {
+  switch (mode) {
+    case fw::PassivityMode::off:
+      return "off";
+    case fw::PassivityMode::observe:
+      return "observe";
+    case fw::PassivityMode::tdpa:
+      return "tdpa";
+  }
+  return "?";
+}
+
 }  // namespace
 
 std::string scenario_name(ScenarioKind kind) {
@@ -89,6 +101,12 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
       {"contact_onsets_per_s", r.contact_onsets_per_s},
+      {"passivity",
+       {{"hsi",
+         {{"dissipated_energy_j", r.hsi_dissipated_energy_j}, {"min_observed_energy_j", r.hsi_min_observed_energy_j}}},
+        {"top",
+         {{"dissipated_energy_j", r.top_dissipated_energy_j}, {"min_observed_energy_j", r.top_min_observed_energy_j}}},
+        {"energy_frames", r.energy_frames}}},
       {"armed_s", static_cast<double>(r.armed_ticks) * 1e-3},
       {"frames", {{"motion", r.motion_frames}, {"force", r.force_frames}}},
       {"network", {{"datagrams", r.network_sent}, {"lost", r.network_lost}, {"reordered", r.network_reordered}}},
@@ -106,6 +124,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"jitter_ms", config.network.jitter_ms},
         {"loss", config.network.loss},
         {"comms_timeout_ms", config.top_firmware.comms_timeout},
+        {"passivity", passivity_name(config.top_firmware.passivity.mode)},
         {"homing", config.homing},
         {"jnd", config.jnd},
         {"jnd_absolute_n", config.jnd_absolute_n},

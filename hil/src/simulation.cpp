@@ -375,6 +375,8 @@ SimResult run_simulation(const SimConfig& config) {
     slot(tick) = both_armed ? tt.force_n : std::nullopt;
     if (both_armed) {
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
+      result.hsi_min_observed_energy_j = std::min(result.hsi_min_observed_energy_j, ht.observed_energy_j);
+      result.top_min_observed_energy_j = std::min(result.top_min_observed_energy_j, tt.observed_energy_j);
       metrics.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), displayed, measured,
                              contact);
       const auto& sender = tl.role().sender().codec_sender();
@@ -413,6 +415,9 @@ SimResult run_simulation(const SimConfig& config) {
   result.network_sent = to_top.stats().sent + to_hsi.stats().sent;
   result.network_lost = to_top.stats().lost + to_hsi.stats().lost;
   result.network_reordered = to_top.stats().reordered + to_hsi.stats().reordered;
+  result.hsi_dissipated_energy_j = hl.telemetry().dissipated_energy_j;
+  result.top_dissipated_energy_j = tl.telemetry().dissipated_energy_j;
+  result.energy_frames = hl.counters().energy_sent + tl.counters().energy_sent;
   result.hsi_seq_gaps = hl.role().receiver().sequence().missing();
   result.top_seq_gaps = tl.role().receiver().sequence().missing();
   result.hsi_overruns = hl.timing().stats().overruns;

@@ -105,6 +105,11 @@ struct SimResult {
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
   double contact_onsets_per_s = 0.0;  // the TOP's wall contact beginning, per armed second (RunMetrics)
+  // Passivity (zero while off): what each lever's controller dissipated since it last armed, the lowest
+  // observed energy seen while both were armed, and the energy frames both sent.
+  double hsi_dissipated_energy_j = 0.0, top_dissipated_energy_j = 0.0;
+  double hsi_min_observed_energy_j = 0.0, top_min_observed_energy_j = 0.0;
+  std::uint64_t energy_frames = 0;
   double bus_load_hsi = 0.0, bus_load_top = 0.0;
   std::uint64_t armed_ticks = 0;
   std::uint64_t motion_frames = 0, force_frames = 0;

@@ -1,0 +1,83 @@
+// The passivity observer and controller (fw/passivity.hpp) on their own: the energy account under the link's
+// accidents, and the controller's bound.
+#include <catch2/catch.hpp>
+#include <cstdint>
+
+#include "lever/fw/passivity.hpp"
+
+using namespace lever::fw;
+using lever::protocol::EnergyMessage;
+
+namespace {
+EnergyMessage joules(double j, std::uint8_t epoch = 1) {
+  return {static_cast<std::uint32_t>(static_cast<std::uint64_t>(j * 1e6) & 0xFFFFFFFFu), 0, epoch};
+}
+}  // namespace
+
+TEST_CASE("the received energy is the largest sent, whatever the frames' order, loss or duplication", "[passivity]") {
+  ReceivedEnergy r;
+  r.accept(joules(0.0));  // the baseline
+  // Sent in this order; arrive reordered, one duplicated, one lost (0.3).
+  const double arrivals[] = {0.1, 0.4, 0.2, 0.4, 0.5, 0.25};
+  double largest = 0.0;
+  for (const double e : arrivals) {
+    r.accept(joules(e));
+    largest = e > largest ? e : largest;
+    CHECK(r.energy_j() == Approx(largest).margin(1e-9));
+  }
+}
+
+TEST_CASE("the energy field wraps at 2^32 uJ and the account goes on growing", "[passivity]") {
+  ReceivedEnergy r;
+  EnergyMessage m{0xFFFFFF00u, 0, 3};
+  r.accept(m);             // baseline just below the wrap
+  m.energy = 0x00000100u;  // 512 uJ later, past the wrap
+  r.accept(m);
+  CHECK(r.energy_j() == Approx(512e-6).margin(1e-12));
+  m.energy = 0xFFFFFF80u;  // an older frame, from before the wrap: dropped
+  r.accept(m);
+  CHECK(r.energy_j() == Approx(512e-6).margin(1e-12));
+}
+
+TEST_CASE("a newer epoch restarts the account; an older one is dropped", "[passivity]") {
+  ReceivedEnergy r;
+  r.accept(joules(0.0, 5));
+  r.accept(joules(2.0, 5));
+  CHECK(r.accept(joules(0.0, 6)));  // the peer armed again
+  CHECK(r.energy_j() == 0.0);
+  r.accept(joules(9.0, 5));  // a late frame of the old epoch
+  CHECK(r.energy_j() == 0.0);
+  r.accept(joules(0.3, 6));
+  CHECK(r.energy_j() == Approx(0.3).margin(1e-9));
+}
+
+TEST_CASE("tdpa never puts out more energy than the peer put in; observe only watches", "[passivity]") {
+  PassivityPort tdpa({PassivityMode::tdpa, 5.0});
+  PassivityPort observe({PassivityMode::observe, 5.0});
+  for (auto* port : {&tdpa, &observe}) {
+    port->on_armed();
+    port->receive(joules(0.0));
+    port->receive(joules(0.010));  // 10 mJ to spend
+  }
+  // 2 W out for 10 ms asks 20 mJ: tdpa gives 10 mJ and scales the rest away.
+  double tdpa_out = 0.0;
+  for (int i = 0; i < 10; ++i) {
+    const double s = tdpa.limit(2.0, 1e-3);
+    CHECK(s >= 0.0);
+    CHECK(s <= 1.0);
+    tdpa_out += s * 2.0 * 1e-3;
+    CHECK(tdpa.state().observed_j >= -1e-12);
+    CHECK(observe.limit(2.0, 1e-3) == 1.0);
+  }
+  CHECK(tdpa_out == Approx(0.010).margin(1e-9));
+  CHECK(tdpa.state().dissipated_j == Approx(0.010).margin(1e-9));
+  CHECK(observe.state().observed_j == Approx(-0.010).margin(1e-9));
+  CHECK(observe.state().dissipated_j == 0.0);
+  // Input energy counts and goes out in the next energy frame, rounded down to the microjoule.
+  tdpa.limit(-1.5, 1e-3);
+  const auto frame = tdpa.frame(100, false);
+  REQUIRE(frame);
+  CHECK(frame->energy == 1500u);
+  CHECK_FALSE(tdpa.frame(101, false));  // nothing new
+  CHECK(tdpa.frame(102, true));         // but a refresh carries it again
+}
