@@ -73,7 +73,14 @@ FaultSpec parse_fault_spec(std::string_view text) {
   if (f.kind == FaultKind::delay_step) {
     if (arg.empty()) throw std::invalid_argument("fault '" + f.text + "': delay-step needs :MILLISECONDS");
     f.value = number(arg, "delay", text);
+    // The network model queues datagrams for the delay: a minute is already more than any watchdog allows.
+    if (f.value > 60000.0)
+      throw std::invalid_argument("fault '" + f.text + "': delay '" + std::string(arg) + "' ms is over 60000");
     if (!has_duration) f.duration_s = std::numeric_limits<double>::infinity();
+  } else if (!arg.empty() && (f.kind == FaultKind::link_down || f.kind == FaultKind::burst_loss)) {
+    // The link joins both sites: a site given here would be ignored, and the user would believe it was not.
+    throw std::invalid_argument("fault '" + f.text + "': " + std::string(to_string(f.kind)) +
+                                " affects the link between both sites and takes no ':" + std::string(arg) + "'");
   } else if (!arg.empty()) {
     if (arg == "hsi") {
       f.site = Site::hsi;

@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
       "frame goes out at once, authenticated with HMAC-SHA-512/256 under a pre-shared key; datagrams from other\n"
       "addresses, forged, tampered or replayed ones are dropped and counted; an allow-list per direction keeps\n"
       "other ids off both sides. SIGINT/SIGTERM flush the recording and exit 0."};
-  app.name("lever-bridge");
+  lever::program::describe(app, "lever-bridge");
   BridgeConfig config;
   std::string config_file, allow, record;
   std::optional<int> site_id;
