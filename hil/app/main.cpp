@@ -112,7 +112,8 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "stepped for DURATION), reboot (the controller restarts; +DURATION of boot time) (:hsi|:top); "
                  "repeatable");
   cmd.add_flag("--json", o.json, "print one JSON object");
-  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace, atomically, as the run goes ('-': stdout)");
+  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace, atomically, as the run goes ('-': stdout)")
+      ->check(program::path());
 }
 
 SimConfig finish(RunOptions& o) {
@@ -187,7 +188,7 @@ int main(int argc, char** argv) {
   sweep->add_option("--scenario", sweep_options.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
-  sweep->add_option("--out", sweep_options.out_dir, "output directory")->required();
+  sweep->add_option("--out", sweep_options.out_dir, "output directory")->required()->check(program::path());
   sweep->add_option("--seeds", sweep_options.seeds, "seeds per point")->check(program::whole(1, 100))->default_str("3");
   sweep->add_option("--duration", sweep_options.duration_s, "simulated seconds per run")
       ->check(program::number({0.1, 3600.0, false, false, "a duration in seconds"}))
@@ -235,8 +236,8 @@ int main(int argc, char** argv) {
   serve->add_flag("--hands-off", serve_options.hands_off,
                   "the operator never takes the handle: the levers rest where their firmware puts them");
   serve->add_flag("--json", serve_options.json, "print the report as one JSON object");
-  serve->add_option("--trace", serve_options.trace,
-                    "write a per-tick CSV trace (lever-hil run's columns; '-': stdout)");
+  serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns; '-': stdout)")
+      ->check(program::path());
 
   if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
 

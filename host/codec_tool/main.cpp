@@ -63,8 +63,8 @@ int main(int argc, char** argv) {
   app.add_option("--filter-hz", config.filter_hz,
                  "low-pass prefilter cut-off in Hz, below the trace's Nyquist frequency (default: off)")
       ->check(program::number({0.0, program::kUnbounded, true, false, "a cut-off in Hz"}));
-  app.add_option("--in", input, "input trace CSV ('-': stdin)");
-  app.add_option("--out", output, "output CSV, written atomically ('-': stdout)");
+  app.add_option("--in", input, "input trace CSV ('-': stdin)")->check(program::path());
+  app.add_option("--out", output, "output CSV, written atomically ('-': stdout)")->check(program::path());
 
   auto* generate = app.add_subcommand("generate", "write an example trace from simple physics");
   lever::tool::GeneratorOptions gen;
@@ -82,7 +82,9 @@ int main(int argc, char** argv) {
   generate->add_option("--duration", gen.duration_s, "seconds of trace at 1 kHz")
       ->check(program::number({0.001, 3600.0, false, false, "a duration in seconds"}))
       ->default_str("10");
-  generate->add_option("--out", gen_out, "output trace CSV, written atomically ('-': stdout)")->required();
+  generate->add_option("--out", gen_out, "output trace CSV, written atomically ('-': stdout)")
+      ->required()
+      ->check(program::path());
   generate->footer(program::kExitCodesHelp);
   app.require_subcommand(0, 1);
 

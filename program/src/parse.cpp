@@ -36,6 +36,11 @@ std::string tidy(std::string message) {
 
 std::string version() { return LEVER_PROGRAM_VERSION; }
 
+CLI::Validator path() {
+  return CLI::Validator([](std::string& text) { return text.empty() ? std::string("must be a path, got ''") : ""; },
+                        "");
+}
+
 void describe(CLI::App& app, const std::string& name) {
   app.name(name);
   app.footer(kExitCodesHelp);
@@ -45,8 +50,7 @@ void describe(CLI::App& app, const std::string& name) {
 std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   // A word where a subcommand goes that names none: CLI11 would say "A subcommand is required" or "The
   // following arguments were not expected".
-  if (argc > 1 && !app.get_subcommands({}).empty() && argv[1][0] != '-' &&
-      !names_subcommand(app, argv[1])) {
+  if (argc > 1 && !app.get_subcommands({}).empty() && argv[1][0] != '-' && !names_subcommand(app, argv[1])) {
     fmt::print(stderr, "{}: unknown subcommand '{}'; expected {} (see --help)\n", app.get_name(), printable(argv[1]),
                subcommand_names(app));
     return kBadInput;

@@ -79,7 +79,9 @@ int main(int argc, char** argv) {
   std::optional<protocol::Role> role;
   bool check_config = false, stats_json = false, sim = false, fast = false, motor_off = false;
   double duration_s = 10.0;
-  app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")->required();
+  app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")
+      ->required()
+      ->check(program::path());
   app.add_option("--role", role, "override lever.role: hsi or top")
       ->transform(program::one_of(
           program::Choices<protocol::Role>{{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}}));

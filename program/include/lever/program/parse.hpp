@@ -15,6 +15,9 @@ std::string version();
 // Names the program, adds --version and puts the exit codes at the foot of its --help (and its subcommands').
 void describe(CLI::App& app, const std::string& name);
 
+// A file or directory name: refuses the empty string, which would otherwise mean "no file" in silence.
+CLI::Validator path();
+
 // Returns the exit code when the program should stop now (0 after help or --version, kBadInput after an
 // error); nullopt when it should go on. A first argument that is no option and no subcommand is reported as
 // a misspelt subcommand, naming the ones there are.
