@@ -12,6 +12,7 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "key.hpp"
+#include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
 #include "relay.hpp"
 
@@ -55,12 +56,13 @@ int main(int argc, char** argv) {
                  "(default: the lever protocol's ids)");
   app.add_option("--record", record, "record every frame both ways to this candump -L log file");
   app.add_flag("--stats-json", config.stats_json, "print a JSON line of statistics every second");
-  app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")->check(CLI::Range(0, 255));
+  app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")
+      ->check(lever::program::whole(0, 255));
   app.add_flag("--insecure", config.insecure, "no authentication (a public key): for debugging only");
   app.add_option("--realtime-priority", realtime_priority,
                  "run the relay under SCHED_FIFO at this priority (1-99) with memory locked; on a busy host "
                  "this is what keeps the latency tail short")
-      ->check(CLI::Range(1, 99));
+      ->check(lever::program::whole(1, 99));
   auto* keygen = app.add_subcommand("keygen", "print a new random key in the key file format");
   app.require_subcommand(0, 1);
 

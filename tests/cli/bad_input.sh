@@ -129,6 +129,11 @@ num "generate --seed 2^64" "--seed must be a seed" "$codec" generate --kind forc
 num "lever-fw --duration nan" "--duration must be a duration in seconds in [0.1, 86400], got 'nan'" \
   "$fw" --config "$examples/top.toml" --sim --duration nan
 num "lever-fw --duration -1" "--duration must be" "$fw" --config "$examples/top.toml" --sim --duration -1
+num "lever-bridge --site-id nan" "--site-id must be a whole number in [0, 255], got 'nan'" "$bridge" --site-id nan
+num "lever-bridge --site-id 256" "--site-id must be a whole number in [0, 255], got 256" "$bridge" --site-id 256
+num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [1, 99], got '1.5'" \
+  "$bridge" --realtime-priority 1.5
+expect 2 "lever-bridge: misspelt subcommand" "unknown subcommand 'kegen'; expected keygen" "$bridge" kegen
 # The same check for configuration keys (lever-fw's TOML, read by lever-fw and lever-hil serve).
 printf '[codec.force]\np = nan\n' >"$work/nan.toml"
 expect 2 "config key NaN" "codec.force.p: must be a number in [0, 6.5535], got nan" "$fw" --config "$work/nan.toml" --check-config
