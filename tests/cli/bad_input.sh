@@ -264,10 +264,15 @@ expect 2 "an input directory" "adir" "$codec" --in adir --out o.csv
 
 # --- Plots: paths are data, never gnuplot or shell code; the script runs from anywhere --------------------
 if command -v gnuplot >/dev/null; then
-  evil="$work/t/a'b\$(touch $work/t/pwned)\"c\`touch $work/t/pwned2\`"
+  # A name that is a shell command inside single quotes, and one that is gnuplot code inside double quotes.
+  gp_evil="$work/t/g\" . system(\"touch $work/t/pwned2\") . \""
+  run "$hil" sweep --out "$gp_evil" --seeds 1 --duration 0.1
+  check "sweep into a directory named with gnuplot code: exit 0 ($(tail -1 "$work/err"))" test "$code" -eq 0
+  check "sweep: the gnuplot code did not run" test ! -e pwned2
+  evil="$work/t/a'\$(touch $work/t/pwned)'b"
   run "$hil" sweep --out "$evil" --seeds 2 --duration 0.1
   check "sweep into a directory named with quotes and \$(...): exit 0 ($(tail -1 "$work/err"))" test "$code" -eq 0
-  check "sweep: no command ran" test ! -e pwned -a ! -e pwned2
+  check "sweep: the shell command did not run" test ! -e pwned
   check "sweep: the plots are there" test -s "$evil/packet_rate_velocity.png" -a -s "$evil/position_error.png"
   check "sweep: the summary states seeds and spread" \
     grep -q "^variant,p_percent,seeds,velocity_rate_percent,velocity_rate_percent_min,velocity_rate_percent_max" "$evil/summary.csv"
