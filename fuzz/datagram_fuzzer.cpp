@@ -37,8 +37,8 @@ using namespace lever::bridge;
 
 bool is_empty(const Datagram& d) {
   const Datagram empty{};
-  if (d.kind != empty.kind || d.sender != 0 || d.sequence != 0 || d.timestamp_us != 0 || d.frame_count != 0 ||
-      !(d.echo == empty.echo)) {
+  if (d.kind != empty.kind || d.sender != 0 || d.sequence != 0 || d.timestamp_us != 0 || d.epoch != 0 ||
+      d.peer_epoch != 0 || d.frame_count != 0 || !(d.echo == empty.echo)) {
     return false;
   }
   for (const auto& f : d.frames) {

@@ -41,6 +41,8 @@ Datagram with_frames(std::size_t count, std::uint8_t dlc) {
   d.sender = 1;
   d.sequence = 1'000'000 + count;
   d.timestamp_us = 86'400'000'000;
+  d.epoch = 0x5EED'0000'0000'0001;
+  d.peer_epoch = 0x5EED'0000'0000'0002;
   d.frame_count = count;
   for (std::size_t i = 0; i < count; ++i) {
     auto& f = d.frames[i];
@@ -84,18 +86,19 @@ int main(int argc, char** argv) {
   request.kind = Kind::probe_request;
   request.sequence = 5;
   request.timestamp_us = 1'000'000;
+  request.epoch = 0x5EED'0000'0000'0002;
   write("valid-probe-request", encoded(request));
   write("valid-probe-reply", encoded(make_probe_reply(request, 1, 17, 1'005'300, 1'005'340)));
 
   // Refused before the tag.
   const Bytes three = encoded(with_frames(3, 8));
   write("short-2-bytes", Bytes(three.begin(), three.begin() + 2));
-  write("short-53-bytes", Bytes(three.begin(), three.begin() + 53));
+  write("short-69-bytes", Bytes(three.begin(), three.begin() + kMinDatagramSize - 1));
   Bytes magic = three;
   magic[0] = 'X';
   write("bad-magic", magic);
   Bytes version = three;
-  version[2] = 2;
+  version[2] = 1;  // the version before the epochs
   write("bad-version", version);
   Bytes oversized = encoded(with_frames(32, 8));
   oversized.push_back(0);
@@ -117,13 +120,13 @@ int main(int argc, char** argv) {
   write("signed-count-33", resigned(three, [](Bytes& c) { c[5] = 33; }));
   write("signed-count-too-high", resigned(three, [](Bytes& c) { c[5] = 4; }));
   write("signed-count-too-low", resigned(three, [](Bytes& c) { c[5] = 2; }));
-  write("signed-bad-id", resigned(three, [](Bytes& c) { c[22] = 0x08; }));
-  write("signed-bad-dlc", resigned(three, [](Bytes& c) { c[24] = 9; }));
+  write("signed-bad-id", resigned(three, [](Bytes& c) { c[kHeaderSize] = 0x08; }));
+  write("signed-bad-dlc", resigned(three, [](Bytes& c) { c[kHeaderSize + 2] = 9; }));
   write("signed-trailing-byte", resigned(three, [](Bytes& c) { c.push_back(0); }));
   write("signed-cut-frame", resigned(three, [](Bytes& c) { c.resize(c.size() - 3); }));
   const Bytes probe = encoded(request);
   write("signed-probe-with-frames", resigned(probe, [](Bytes& c) { c[5] = 1; }));
-  write("signed-probe-request-with-echo", resigned(probe, [](Bytes& c) { c[29] = 1; }));
+  write("signed-probe-request-with-echo", resigned(probe, [](Bytes& c) { c[kHeaderSize + 7] = 1; }));
   write("signed-probe-short-body", resigned(probe, [](Bytes& c) { c.resize(c.size() - 8); }));
   std::printf("wrote %d seeds to %s\n", written, dir.c_str());
   return 0;

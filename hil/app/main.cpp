@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <optional>
@@ -15,6 +16,7 @@
 #include "lever/program/parse.hpp"
 #include "report.hpp"
 #include "serve.hpp"
+#include "sphere.hpp"
 #include "sweep.hpp"
 
 namespace {
@@ -30,7 +32,11 @@ extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
 const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
                                                 {"free-motion", ScenarioKind::free_motion},
-                                                {"press-hold", ScenarioKind::press_hold}};
+                                                {"press-hold", ScenarioKind::press_hold},
+                                                {"sphere-3dof", ScenarioKind::sphere_3dof}};
+const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
+const program::Choices<lever::fw::MotionVelocity> kMotionVelocities{
+    {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
 const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 // Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
@@ -52,10 +58,33 @@ struct RunOptions {
   std::vector<std::string> faults;
   bool json = false;
   std::string trace;
+  double gauge_rate_hz = StrainGaugeParams{}.output_rate_hz();
 };
 
+// A number in [lo, hi], or exactly 0 when zero_ok (program::number has no "0 or" form).
+CLI::Validator number_in(double lo, double hi, bool zero_ok = false) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) ||
+            !((v >= lo && v <= hi) || (zero_ok && v == 0.0)))
+          return fmt::format("{} is not {}a number in [{}, {}]", text, zero_ok ? "0 or " : "", lo, hi);
+        return {};
+      },
+      fmt::format("{}NUMBER in [{} - {}]", zero_ok ? "0 or " : "", lo, hi));
+}
+
+// The amplifier's output rates: its conversion rate over 2^UR, UR = 0..7 (docs/hil-model.md).
+int averaging_for(double rate_hz) {
+  const double adc = StrainGaugeParams{}.adc_rate_hz;
+  for (int n = 1; n <= 128; n *= 2)
+    if (std::fabs(adc / n - rate_hz) <= 1e-9 * adc) return n;
+  return 0;
+}
+
 void add_run_options(CLI::App& cmd, RunOptions& o) {
-  cmd.add_option("--scenario", o.config.scenario, "wall-tap (the paper's task), free-motion or press-hold")
+  cmd.add_option("--scenario", o.config.scenario,
+                 "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
       ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
   cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
@@ -78,6 +107,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
       ->check(program::number(program::kWeberFraction));
   cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
       ->check(program::number(program::kWeberFraction));
+  cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
+                 "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
+                 "estimate (its smooth velocity estimate)")
+      ->transform(program::one_of(kMotionVelocities))
+      ->default_str("difference");
   cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
       ->check(program::number(kFloorVelocity))
       ->default_str("0");
@@ -91,6 +125,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
       ->check(program::number(program::kCutoffAt1kHz));
   cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
       ->check(program::number(program::kCutoffAt1kHz));
+  cmd.add_option("--topology", o.config.topology,
+                 "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
+                 "over the network)")
+      ->transform(program::one_of(kTopologies))
+      ->default_str("two-sites");
   cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
       ->check(program::number(kNetworkMs))
       ->default_str("0");
@@ -111,6 +150,28 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault, tick-late (the firmware not "
                  "stepped for DURATION), reboot (the controller restarts; +DURATION of boot time) (:hsi|:top); "
                  "repeatable");
+  const StrainGaugeParams gauge;
+  cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
+                 "the force amplifier's IIR cut-off, Hz (Flintec DAD 141.1: 18, 8, 4, 3, 2, 1, 0.5, 0.25; 0: off)")
+      ->check(number_in(0.1, 100.0, true))
+      ->default_str(fmt::format("{}", gauge.filter_hz));
+  cmd.add_option("--gauge-rate-hz", o.gauge_rate_hz,
+                 "the force amplifier's output rate, readings per second (600 / 2^k, k = 0..7)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || averaging_for(v) == 0)
+              return text + " is not 600 / 2^k for k = 0..7 (600, 300, 150, 75, 37.5, 18.75, 9.375, 4.6875)";
+            return {};
+          },
+          "600 / 2^k"))
+      ->default_str(fmt::format("{}", gauge.output_rate_hz()));
+  cmd.add_option("--gauge-noise-n", o.config.gauge.noise_n, "the force amplifier's noise per conversion, N rms")
+      ->check(program::number({0.0, 1.0, false, false, "a noise in N rms"}))
+      ->default_str(fmt::format("{}", gauge.noise_n));
+  cmd.add_option("--gauge-step-n", o.config.gauge.step_n, "the force amplifier's display step, N")
+      ->check(program::number({1e-6, 1.0, false, false, "a step in N"}))
+      ->default_str(fmt::format("{}", gauge.step_n));
   cmd.add_flag("--json", o.json, "print one JSON object");
   cmd.add_option("--trace", o.trace, "write a per-tick CSV trace, atomically, as the run goes ('-': stdout)")
       ->check(program::path());
@@ -132,6 +193,11 @@ SimConfig finish(RunOptions& o) {
                                           program::short_number(c.duration_s)));
   }
   c.homing = !o.no_homing;
+  c.gauge.averaging = averaging_for(o.gauge_rate_hz);
+  const auto& n = c.network;
+  if (c.topology == Topology::one_site && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
+    throw std::invalid_argument(
+        "--delay-ms, --jitter-ms and --loss need --topology two-sites: one site has no network");
 
   c.record_trace = !o.trace.empty();
   return c;
@@ -148,6 +214,12 @@ void print_human(std::FILE* out, const SimConfig& c, const SimResult& r) {
   fmt::print(out,
              "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
+  fmt::print(
+      out,
+      "  by cause: {:.1f} % beside the measurement {} tick(s) earlier (codec, filter, loss, jitter); codec alone "
+      "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
+      100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
+      100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
   fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);
@@ -201,9 +273,18 @@ int main(int argc, char** argv) {
   sweep->add_option("--floor-force", sweep_options.floor_force, "force floor of the +floor variant, N")
       ->check(program::number({0.0, 65.535, true, false, "a floor in N"}))
       ->default_str("0.05");
-  sweep->add_option("--filter-hz", sweep_options.filter_hz, "prefilter cut-off of the filter variants")
-      ->check(program::number({0.0, 500.0, true, true, "a cut-off in Hz below Nyquist (500 Hz at 1 kHz)"}))
+  sweep
+      ->add_option("--filter-hz-velocity", sweep_options.filter_hz_velocity,
+                   "velocity prefilter cut-off of the filter variants, Hz (0: off); 30: beyond the 20-30 Hz of "
+                   "kinesthetic motion sensing")
+      ->check(program::number(program::kCutoffAt1kHz))
       ->default_str("30");
+  sweep
+      ->add_option("--filter-hz-force", sweep_options.filter_hz_force,
+                   "force prefilter cut-off of the filter variants, Hz (0: off); off: force is felt up to about "
+                   "1 kHz, beyond the loop's Nyquist")
+      ->check(program::number(program::kCutoffAt1kHz))
+      ->default_str("0");
 
   ServeOptions serve_options;
   auto* serve = app.add_subcommand(
@@ -244,6 +325,8 @@ int main(int argc, char** argv) {
   try {
     if (run->parsed()) {
       SimConfig config = finish(run_options);
+      if (config.scenario == ScenarioKind::sphere_3dof)
+        return run_sphere_command(sphere_config_from(config), run_options.json, run_options.trace);
       // The trace streams to its file as the run goes: an hour of it is 1 GB, never held whole.
       std::optional<program::OutputFile> trace;
       if (!run_options.trace.empty()) {
@@ -262,10 +345,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (serve->parsed()) {
+      if (serve_options.scenario == ScenarioKind::sphere_3dof)
+        throw std::invalid_argument("serve plays the levers' world; sphere-3dof has no levers (use run)");
       std::signal(SIGINT, on_stop_signal);
       std::signal(SIGTERM, on_stop_signal);
       return run_serve(serve_options, g_stop);
     }
+    if (sweep_options.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(sweep_options);
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {
     fmt::print(stderr, "lever-hil: {}\n", program::printable(e.what(), 400));

@@ -37,6 +37,8 @@ std::string scenario_name(ScenarioKind kind) {
       return "free-motion";
     case ScenarioKind::press_hold:
       return "press-hold";
+    case ScenarioKind::sphere_3dof:
+      return "sphere-3dof";
   }
   return "?";
 }
@@ -74,6 +76,13 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"position_rmse", r.position_rmse_rad},
       {"force_rmse", r.force_rmse_n},
       {"force_jnd_violation", r.force_jnd_violation},
+      {"force_distortion_by_cause",
+       {{"link", r.force_jnd_violation_link},
+        {"codec", r.force_jnd_violation_codec},
+        {"filter", r.force_jnd_violation_filter},
+        {"nominal_delay_ticks", r.nominal_delay_ticks},
+        {"prefilter_delay_ms", r.prefilter_delay_ms}}},
+      {"deadband_frames", r.motion_frames + r.force_frames - r.refresh_frames},
       {"bus_load", std::max(r.bus_load_hsi, r.bus_load_top)},
       {"bus_load_hsi", r.bus_load_hsi},
       {"bus_load_top", r.bus_load_top},
@@ -91,6 +100,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"parameters",
        {{"velocity", codec_json(config.velocity_codec)},
         {"force", codec_json(config.force_codec)},
+        {"topology", config.topology == Topology::one_site ? "one-site" : "two-sites"},
         {"delay_ms", config.network.delay_ms},
         {"jitter_ms", config.network.jitter_ms},
         {"loss", config.network.loss},
@@ -101,7 +111,9 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"substeps", config.substeps},
         {"wall_stiffness", config.wall.stiffness},
         {"gauge_noise_n", config.gauge.noise_n},
-        {"gauge_rate_hz", config.gauge.sample_rate_hz}}},
+        {"gauge_filter_hz", config.gauge.filter_hz},
+        {"gauge_rate_hz", config.gauge.output_rate_hz()},
+        {"gauge_step_n", config.gauge.step_n}}},
       {"realtime_factor", r.realtime_factor},
       {"wall_time_s", r.wall_time_s},
   };

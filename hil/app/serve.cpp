@@ -243,13 +243,14 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
 
     const double contact = world.contact_force();
     const double hand = world.hand_force();
-    // The gauges' amplifier: ADC noise and quantization, then the register layout the lever's config names.
+    // The gauges' amplifier (noise, filter, output rate, display step), then the register layout the lever's
+    // config names.
     top_gauge.update(contact, tick);
-    if (const auto r = top_gauge.latest()) measured_force = r->raw * sim.gauge.newton_per_count;
+    if (const auto r = top_gauge.latest()) measured_force = r->raw * sim.gauge.step_n;
     if (top->gauge) top->gauge->set_force(measured_force);
     if (hsi->gauge) {
       hsi_gauge.update(hand, tick);
-      if (const auto r = hsi_gauge.latest()) hsi->gauge->set_force(r->raw * sim.gauge.newton_per_count);
+      if (const auto r = hsi_gauge.latest()) hsi->gauge->set_force(r->raw * sim.gauge.step_n);
     }
     world.update_operator(tick, hand);
 

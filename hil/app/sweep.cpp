@@ -52,9 +52,7 @@ struct Job {
 // a directory's name is data and never gnuplot code, and the script runs from any directory.
 std::string gnuplot_script(const std::string& scenario, int seeds) {
   return fmt::format(R"gp(# lever-hil sweep: plots from summary.csv beside this script; run it as `gnuplot plots.gp`.
-dir = ARG0
-while (strlen(dir) > 0 && dir[strlen(dir):strlen(dir)] ne "/") {{ dir = dir[1:strlen(dir) - 1] }}
-file = dir . "summary.csv"
+{2}file = dir . "summary.csv"
 set terminal pngcairo size 900,650 font ",11"
 set datafile separator ","
 # The legend below the plot, never over the curves.
@@ -62,7 +60,7 @@ set key below horizontal
 set grid
 set xlabel "deadband parameter p [%]"
 set xrange [0:25]
-spread = "mean of {1} seed{2}; bars: min to max"
+spread = "mean of {1} seed{3}; bars: min to max"
 variants = "deadband predictive predictive+filter deadband+floor predictive+filter+floor"
 # columns: variant,p_percent,seeds, then mean,min,max of each metric
 set output dir . "packet_rate_velocity.png"
@@ -90,11 +88,11 @@ set title "{0}: TOP position error (RMS against the HSI)\n" . spread
 set ylabel "position RMSE [mrad]"
 plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $13 : 1/0):14:15 with yerrorlines title word(variants,i)
 )gp",
-                     scenario, seeds, seeds == 1 ? "" : "s");
+                     scenario, seeds, kGnuplotScriptDir, seeds == 1 ? "" : "s");
 }
 
-// gnuplot on the script, started without a shell: its path is an argument, never a command line. Its output
-// goes to stderr (stdout is the program's report). Returns gnuplot's exit status, or 127 if it cannot start.
+}  // namespace
+
 int run_gnuplot(const std::filesystem::path& script) {
   const std::string path = std::filesystem::absolute(script).string();  // never read as an option
   posix_spawn_file_actions_t actions;
@@ -111,18 +109,22 @@ int run_gnuplot(const std::filesystem::path& script) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-}  // namespace
+void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files) {
+  namespace fs = std::filesystem;
+  const fs::path dir(out_dir);
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw program::BadInput(fmt::format("--out {} exists and is not a directory", program::printable(out_dir)));
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", program::printable(out_dir), ec.message()));
+  // Refused now, not after the runs: a file that is a device, a link or a directory.
+  for (const char* name : files) program::OutputFile((dir / name).string(), "--out");
+}
 
 int run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
   const fs::path dir(o.out_dir);
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw program::BadInput(fmt::format("--out {} exists and is not a directory", program::printable(o.out_dir)));
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", program::printable(o.out_dir), ec.message()));
-  // Refused now, not after the runs: a sweep.csv or summary.csv that is a device, a link or a directory.
-  for (const char* name : {"sweep.csv", "summary.csv", "plots.gp"}) program::OutputFile((dir / name).string(), "--out");
+  prepare_sweep_dir(o.out_dir, {"sweep.csv", "summary.csv", "plots.gp"});
 
   std::vector<Job> jobs;
   for (const auto& v : kVariants)
@@ -139,9 +141,11 @@ int run_sweep(const SweepOptions& o) {
       c.scenario = o.scenario;
       c.duration_s = o.duration_s;
       c.seed = job.seed;
-      const double cutoff = job.variant->filter ? o.filter_hz : 0.0;
-      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0, cutoff};
-      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0, cutoff};
+      const bool filter = job.variant->filter;
+      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
+                          filter ? o.filter_hz_velocity : 0.0};
+      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
+                       filter ? o.filter_hz_force : 0.0};
       job.result = run_simulation(c);
       const std::size_t finished = ++done;
       std::lock_guard lock(print);

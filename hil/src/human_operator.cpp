@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 namespace lever::hil {
 namespace {
@@ -22,6 +23,8 @@ double minimum_jerk_rate(double tau) {
 HumanOperator::HumanOperator(const OperatorParams& p, ScenarioKind scenario, double wall_angle, double start_angle,
                              std::uint64_t seed)
     : p_(p), scenario_(scenario), wall_(wall_angle), rng_(seed), intent_angle_(start_angle) {
+  if (scenario == ScenarioKind::sphere_3dof)
+    throw std::invalid_argument("sphere-3dof has no lever: lever::hil::run_sphere runs it");
   move_from_ = start_angle;
   start(next_segment(), 0.0);
 }
@@ -81,6 +84,7 @@ Segment HumanOperator::next_segment() {
         default:
           return move(rng_.uniform(0.05, 0.15), rng_.uniform(0.3, 0.6), rng_.uniform(0.5, 1.0));
       }
+    case ScenarioKind::sphere_3dof:  // refused by the constructor
     case ScenarioKind::wall_tap:
       // The paper's 1-DoF task: feel the wall by tapping it and pressing against it.
       if (taps_left_ > 0) {

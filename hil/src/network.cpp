@@ -26,7 +26,7 @@ void NetworkLink::send(const protocol::CanFrame& f, Nanos t) {
   std::push_heap(heap_.begin(), heap_.begin() + static_cast<std::ptrdiff_t>(size_), later);
 }
 
-bool NetworkLink::pop_arrived(Nanos t, protocol::CanFrame& f) {
+bool NetworkLink::pop_arrived(Nanos t, TimedFrame& f) {
   if (size_ == 0 || heap_[0].arrival > t) return false;
   std::pop_heap(heap_.begin(), heap_.begin() + static_cast<std::ptrdiff_t>(size_), later);
   const InFlight& d = heap_[--size_];
@@ -34,7 +34,7 @@ bool NetworkLink::pop_arrived(Nanos t, protocol::CanFrame& f) {
   delivered_order_max_ = std::max(delivered_order_max_, d.order);
   delivered_any_ = true;
   ++stats_.delivered;
-  f = d.frame;
+  f = {d.frame, d.arrival};
   return true;
 }
 

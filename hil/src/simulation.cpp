@@ -1,8 +1,10 @@
 #include "lever/hil/simulation.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 
 #include "lever/common/rng.hpp"
@@ -65,7 +67,7 @@ struct LeverSite {
 };
 
 // A lever-bridge: every lever-protocol frame on its bus goes to the link, every datagram from the link onto
-// its bus.
+// its bus, each `latency` after it was received, by its own timestamp.
 struct Bridge {
   CanBus* bus;
   CanBus::Node node;
@@ -74,13 +76,40 @@ struct Bridge {
   Nanos latency;
 
   void pump(Nanos now) {
-    protocol::CanFrame f;
-    while (incoming->pop_arrived(now, f)) bus->send(node, f, now + latency);
     TimedFrame tf;
+    while (incoming->pop_arrived(now, tf)) bus->send(node, tf.frame, tf.time + latency);
     protocol::FrameAddress address;
     while (bus->receive(node, tf))
       if (protocol::classify(tf.frame.id, address) == protocol::DecodeError::none)
         outgoing->send(tf.frame, tf.time + latency);
+  }
+};
+
+// The buses and bridges between two firmware ticks. Serviced every `step` up to `now`: a frame a bridge picks up
+// in (s - step, s] is queued at s with its own time + latency > s, ahead of where the bus has run, so with
+// step <= latency every frame's delay is exactly what the bus and network models give it (servicing only at
+// ticks added up to two ticks to each hop: a frame took 3 ticks from one lever to the other).
+struct Transport {
+  CanBus* hsi_bus;
+  CanBus* top_bus;  // the HSI's bus when both levers are on one site
+  Bridge* bridges[2];
+  Nanos step;
+
+  void service(Nanos from, Nanos now) {
+    for (Nanos s = from + step;; s += step) {
+      if (s > now || quiet()) s = now;  // nothing in flight: no frame can reach a bridge before now
+      hsi_bus->advance_to(s);
+      if (top_bus != hsi_bus) top_bus->advance_to(s);
+      for (Bridge* b : bridges)
+        if (b) b->pump(s);
+      if (s == now) break;
+    }
+  }
+  bool quiet() const {
+    if (!hsi_bus->idle() || !top_bus->idle()) return false;
+    for (const Bridge* b : bridges)
+      if (b && b->incoming->in_flight()) return false;
+    return true;
   }
 };
 
@@ -126,19 +155,35 @@ fw::LeverConfig SimConfig::default_firmware(protocol::Role role) {
   fw::LeverConfig c;
   c.role = role;
   c.use_force_sensor = role == protocol::Role::top;
+  c.motion_velocity = fw::MotionVelocity::difference;  // the paper's chain (III-E)
   return c;
+}
+
+int nominal_one_way_delay_ticks(const SimConfig& config) {
+  const double frame_ns = protocol::frame_bits_worst_case(8) * 1e9 / config.bitrate;
+  const double ns = config.topology == Topology::one_site
+                        ? frame_ns
+                        : 2 * frame_ns + 2 * config.bridge_latency_us * 1e3 + config.network.delay_ms * 1e6;
+  return static_cast<int>(std::ceil(ns / static_cast<double>(kTick)));
 }
 
 SimResult run_simulation(const SimConfig& config) {
   const auto wall_start = std::chrono::steady_clock::now();
   Nanos now = 0;
 
-  CanBus hsi_bus(config.bitrate), top_bus(config.bitrate);
+  if (!(config.bridge_latency_us >= 1.0))
+    throw std::invalid_argument("HIL: a bridge takes at least 1 us from receiving a frame to sending it");
+  const bool one_site = config.topology == Topology::one_site;
+  CanBus hsi_bus(config.bitrate), top_site_bus(config.bitrate);
+  CanBus& top_bus = one_site ? hsi_bus : top_site_bus;
   NetworkLink to_top(config.network, config.seed * 4 + 1), to_hsi(config.network, config.seed * 4 + 2);
 
   fw::LeverConfig hsi_fw = config.hsi_firmware, top_fw = config.top_firmware;
   hsi_fw.motion_codec = config.velocity_codec;
   top_fw.force_codec = config.force_codec;
+  if (!config.gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
+  calibrate_for(hsi_fw.gauge, config.gauge);
+  calibrate_for(top_fw.gauge, config.gauge);
   // Power-up angles: anywhere in the working range with homing, the operator's start angle without.
   double hsi_angle = 0.1, top_angle = 0.1;
   if (config.homing) {
@@ -157,8 +202,15 @@ SimResult run_simulation(const SimConfig& config) {
               hsi_angle, top_angle);
   const auto host = hsi_bus.add_node();  // the operator console at the HSI's site
   const Nanos latency = static_cast<Nanos>(config.bridge_latency_us * 1e3);
-  Bridge bridge_hsi{&hsi_bus, hsi_bus.add_node(), &to_top, &to_hsi, latency};
-  Bridge bridge_top{&top_bus, top_bus.add_node(), &to_hsi, &to_top, latency};
+  std::optional<Bridge> bridge_hsi, bridge_top;
+  if (!one_site) {
+    bridge_hsi.emplace(Bridge{&hsi_bus, hsi_bus.add_node(), &to_top, &to_hsi, latency});
+    bridge_top.emplace(Bridge{&top_bus, top_bus.add_node(), &to_hsi, &to_top, latency});
+  }
+  Transport transport{&hsi_bus,
+                      &top_bus,
+                      {bridge_hsi ? &*bridge_hsi : nullptr, bridge_top ? &*bridge_top : nullptr},
+                      std::min<Nanos>(latency, 100'000)};
 
   auto send_command = [&](protocol::Opcode opcode, bool to_hsi_lever, bool to_top_lever) {
     if (!to_hsi_lever && !to_top_lever) return;
@@ -189,6 +241,11 @@ SimResult run_simulation(const SimConfig& config) {
   std::vector<bool> rebooted(config.faults.size(), false);
   const auto scenario_ticks = static_cast<fw::Tick>(std::llround(config.duration_s * 1000.0));
   RunMetrics metrics(config.jnd, config.jnd_absolute_n);
+  result.nominal_delay_ticks = nominal_one_way_delay_ticks(config);
+  result.prefilter_delay_ms =
+      config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0;
+  // The TOP's measurements of the last nominal delay's ticks, for the distortion without the transport delay.
+  std::vector<std::optional<double>> measured_history(static_cast<std::size_t>(result.nominal_delay_ticks) + 1);
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
   fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
 
@@ -280,13 +337,8 @@ SimResult run_simulation(const SimConfig& config) {
     top->hal.gauge_.update(contact, tick);
     if (hsi_gauge_used) hsi->hal.gauge_.update(hand, tick);
 
-    // Frames: the link, then both buses up to now, then what the bridges picked up goes to the link.
-    bridge_hsi.pump(now);
-    bridge_top.pump(now);
-    hsi_bus.advance_to(now);
-    top_bus.advance_to(now);
-    bridge_hsi.pump(now);
-    bridge_top.pump(now);
+    // Frames since the last tick, each at its own time.
+    transport.service(now - kTick, now);
 
     // The host homes and arms both levers after power-up, and once injected faults are over re-homes and
     // re-arms the ones that need it.
@@ -317,10 +369,21 @@ SimResult run_simulation(const SimConfig& config) {
     const auto& tt = tl.telemetry();
     const double measured = tt.force_n.value_or(0.0);
     const double displayed = ht.remote.value_or(0.0);
+    const auto slot = [&](fw::Tick k) -> std::optional<double>& {
+      return measured_history[static_cast<std::size_t>(k) % measured_history.size()];
+    };
+    slot(tick) = both_armed ? tt.force_n : std::nullopt;
     if (both_armed) {
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
       metrics.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), displayed, measured,
                              contact);
+      const auto& sender = tl.role().sender().codec_sender();
+      const auto& delayed = slot(tick + 1);  // the oldest entry: nominal_delay_ticks ago
+      if (tt.force_n && delayed && ht.remote && !sender.model().empty()) {
+        const double lossless = sender.model().at(static_cast<double>(tick - top->boot_tick))[0];
+        const double filtered = sender.prefilter().enabled() ? sender.prefilter().output()[0] : measured;
+        metrics.add_force_causes(displayed, *delayed, lossless, filtered, measured);
+      }
     }
     for (auto& r : result.faults) {
       track_reaction(r.hsi, *hsi, t, r.spec.start_s);

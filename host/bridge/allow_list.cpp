@@ -5,6 +5,7 @@
 #include <charconv>
 
 #include "lever/protocol/messages.hpp"
+#include "shown_value.hpp"
 
 namespace lever::bridge {
 namespace {
@@ -21,9 +22,11 @@ std::uint32_t parse_id(std::string_view text, std::string_view item) {
   std::uint32_t id = 0;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), id, 16);
   if (text.empty() || ec != std::errc() || end != text.data() + text.size())
-    throw std::invalid_argument(fmt::format("allow-list item '{}': '{}' is not a hexadecimal id", item, text));
+    throw std::invalid_argument(fmt::format("allow-list item '{}': '{}' is not a hexadecimal id", shown_value(item, 40),
+                                            shown_value(text, 40)));
   if (id > protocol::kMaxStandardId)
-    throw std::invalid_argument(fmt::format("allow-list item '{}': 0x{:X} is beyond 11 bits (0x7FF)", item, id));
+    throw std::invalid_argument(
+        fmt::format("allow-list item '{}': 0x{:X} is beyond 11 bits (0x7FF)", shown_value(item, 40), id));
   return id;
 }
 
@@ -40,7 +43,8 @@ AllowList AllowList::parse(std::string_view text) {
     const auto dash = item.find('-');
     const std::uint32_t first = parse_id(item.substr(0, dash), item);
     const std::uint32_t last = dash == std::string_view::npos ? first : parse_id(item.substr(dash + 1), item);
-    if (last < first) throw std::invalid_argument(fmt::format("allow-list item '{}': range runs backwards", item));
+    if (last < first)
+      throw std::invalid_argument(fmt::format("allow-list item '{}': range runs backwards", shown_value(item, 40)));
     for (std::uint32_t id = first; id <= last; ++id) list.ids_.set(id);
   }
   return list;

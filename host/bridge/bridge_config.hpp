@@ -1,5 +1,7 @@
 #pragma once
-// lever-bridge's settings: command line over an optional TOML file over defaults.
+// lever-bridge's settings: command line over an optional TOML file over defaults, and their validation. Everything
+// a user can get wrong is refused here, before any socket is opened, with a message naming the option or key and
+// the value (`lever-bridge --check-config` runs exactly this).
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -24,12 +26,20 @@ struct BridgeConfig {
   bool stats_json = false;
   double stats_interval_s = 1.0;
   double probe_interval_s = 1.0;
-  double can_bitrate = 1e6;             // for the bus-load figure
-  std::optional<std::uint8_t> site_id;  // default: random at start-up
+  double can_bitrate = 1e6;                  // for the bus-load figure
+  std::optional<std::uint8_t> site_id;       // default: random at start-up
+  std::optional<std::uint8_t> peer_site_id;  // when set, datagrams carrying another sender id are refused
+  int realtime_priority = 0;                 // SCHED_FIFO priority 1-99; 0: the normal policy
 };
 
-// Reads the TOML file's keys into `config` (the command line is applied afterwards by the caller).
-// Throws std::invalid_argument with the file, key and problem.
+// Reads the TOML file's keys into `config` (the command line is applied afterwards by the caller). Relative paths
+// in the file (key, record) are taken from the file's directory, so a configuration can be moved with its key.
+// Throws std::invalid_argument with the file, key, value and problem.
 void load_config_file(const std::filesystem::path& file, BridgeConfig& config);
+
+// The checks that need the whole configuration (file and command line merged): required settings, the interface
+// name, the addresses (port 0, a broadcast, multicast or unspecified peer, a peer that is ourselves, mixed
+// families) and the site ids. Resolves host names but opens nothing. Throws std::invalid_argument.
+void validate(const BridgeConfig& config);
 
 }  // namespace lever::bridge

@@ -4,9 +4,11 @@
 #include <sodium.h>
 #include <sys/mman.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "allow_list.hpp"
@@ -15,11 +17,13 @@
 #include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
 #include "relay.hpp"
+#include "shown_value.hpp"
 
 namespace {
 
 using namespace lever::bridge;
 constexpr int kBadInput = lever::program::kBadInput;
+constexpr int kRuntimeFailure = 1;
 
 int fail(int code, const std::string& message) {
   fmt::print(stderr, "lever-bridge: {}\n", message);
@@ -33,67 +37,116 @@ Key insecure_key() {
   return k;
 }
 
+// keygen --out: a path the user named that cannot be a new key file is bad input; the rest is the machine's.
+bool is_path_mistake(int error) {
+  return error == EEXIST || error == ENOENT || error == ENOTDIR || error == EISDIR || error == ELOOP ||
+         error == ENAMETOOLONG;
+}
+
+int keygen(const std::string& out) {
+  try {
+    const Key key = generate_key();
+    if (out.empty() || out == "-") {
+      fmt::print("{}", format_key(key));
+      return std::fflush(stdout) == 0 ? 0 : fail(kRuntimeFailure, "keygen: cannot write to stdout");
+    }
+    write_key_file(out, key);
+    fmt::print(stderr, "lever-bridge: wrote a new key to {} (mode 0600); copy it to the other end\n", out);
+    return 0;
+  } catch (const KeyError& e) {
+    return fail(is_path_mistake(e.error_number()) ? kBadInput : kRuntimeFailure, e.what());
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "Relays CAN frames between a SocketCAN interface and a peer lever-bridge over UDP (IPv4 or IPv6). Every\n"
       "frame goes out at once, authenticated with HMAC-SHA-512/256 under a pre-shared key; datagrams from other\n"
-      "addresses, forged, tampered or replayed ones are dropped and counted; an allow-list per direction keeps\n"
-      "other ids off both sides. SIGINT/SIGTERM flush the recording and exit 0."};
-  lever::program::describe(app, "lever-bridge");
-  BridgeConfig config;
-  std::string config_file, allow, record;
-  std::optional<int> site_id;
-  int realtime_priority = 0;
-  app.add_option("--config", config_file, "TOML file with any of the options below (the command line wins)");
-  app.add_option("--can", config.can_interface, "SocketCAN interface, e.g. can0 or vcan0");
-  app.add_option("--bind", config.bind, "local UDP address, HOST:PORT or [IPv6]:PORT");
-  app.add_option("--peer", config.peer, "the other bridge's UDP address");
-  app.add_option("--key", config.key_file, "pre-shared key file (64 hex digits, mode 0600; see keygen)");
+      "addresses, forged, tampered, replayed or sent before this bridge started are dropped and counted; an\n"
+      "allow-list per direction keeps other ids off both sides. SIGINT, SIGTERM and SIGHUP flush the recording\n"
+      "and exit 0."};
+  lever::program::describe(app, "lever-bridge");  // --version; the footer below says more
+  app.footer(
+      "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
+      "socket, the recording, real-time scheduling); 2 bad input (an option, the configuration file, the key file,\n"
+      "keygen --out naming an existing file or a missing directory).");
+  std::string config_file;
+  std::optional<std::string> can, bind, peer, key_file, allow, record;
+  std::optional<int> site_id, peer_site_id, realtime_priority;
+  bool stats_json = false, insecure = false, check_only = false;
+  app.add_option("--config", config_file,
+                 "TOML file with any of the options below as keys (the command line wins); relative paths in it "
+                 "are relative to the file");
+  app.add_option("--can", can, "SocketCAN interface, e.g. can0 or vcan0");
+  app.add_option("--bind", bind, "local UDP address, HOST:PORT or [IPv6]:PORT");
+  app.add_option("--peer", peer, "the other bridge's UDP address (one unicast address)");
+  app.add_option("--key", key_file, "pre-shared key file (64 hex digits, mode 0600; see keygen)");
   app.add_option("--allow", allow,
                  "CAN ids allowed in both directions, hex ids and ranges: 0x100-0x1FF,0x700 "
                  "(default: the lever protocol's ids)");
   app.add_option("--record", record, "record every frame both ways to this candump -L log file");
-  app.add_flag("--stats-json", config.stats_json, "print a JSON line of statistics every second");
+  app.add_flag("--stats-json", stats_json, "print a JSON line of statistics every second");
   app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")
       ->check(lever::program::whole(0, 255));
-  app.add_flag("--insecure", config.insecure, "no authentication (a public key): for debugging only");
+  app.add_option("--peer-site-id", peer_site_id,
+                 "the peer's site id, 0-255: datagrams carrying another are refused (default: any but our own)")
+      ->check(lever::program::whole(0, 255));
+  app.add_flag("--insecure", insecure, "no authentication (a public key): for debugging only");
   app.add_option("--realtime-priority", realtime_priority,
                  "run the relay under SCHED_FIFO at this priority (1-99) with memory locked; on a busy host "
                  "this is what keeps the latency tail short")
       ->check(lever::program::whole(1, 99));
-  auto* keygen = app.add_subcommand("keygen", "print a new random key in the key file format");
+  app.add_flag("--check-config", check_only,
+               "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
+               "not); opens no CAN interface and no socket");
+  auto* keygen_command = app.add_subcommand(
+      "keygen", "make a new random key: with --out, a new file of mode 0600 (never overwriting one); else stdout");
+  std::string keygen_out;
+  keygen_command->add_option("--out", keygen_out, "the key file to create ('-': stdout)");
   app.require_subcommand(0, 1);
 
   if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
-  if (sodium_init() < 0) return fail(1, "libsodium failed to initialize");
-  if (keygen->parsed()) {
-    fmt::print("{}", format_key(generate_key()));
-    return 0;
-  }
+  if (sodium_init() < 0) return fail(kRuntimeFailure, "libsodium failed to initialize");
+  if (keygen_command->parsed()) return keygen(keygen_out);
 
+  BridgeConfig config;
   Key key;
   try {
-    if (!config_file.empty()) {
-      BridgeConfig from_file;
-      load_config_file(config_file, from_file);
-      // The command line overrides the file: re-apply what was given on it.
-      BridgeConfig cli = config;
-      config = from_file;
-      if (!cli.can_interface.empty()) config.can_interface = cli.can_interface;
-      if (!cli.bind.empty()) config.bind = cli.bind;
-      if (!cli.peer.empty()) config.peer = cli.peer;
-      if (!cli.key_file.empty()) config.key_file = cli.key_file;
-      config.stats_json = config.stats_json || cli.stats_json;
-      config.insecure = cli.insecure;  // only ever from the command line, where it is explicit
+    if (!config_file.empty()) load_config_file(config_file, config);
+    // The command line overrides the file.
+    if (can) config.can_interface = *can;
+    if (bind) config.bind = *bind;
+    if (peer) config.peer = *peer;
+    if (key_file) {
+      if (key_file->empty()) return fail(kBadInput, "--key: the path is empty");
+      config.key_file = *key_file;
     }
-    if (!allow.empty()) config.allow_to_network = config.allow_from_network = AllowList::parse(allow);
-    if (!record.empty()) config.record = record;
+    if (allow) {
+      try {
+        config.allow_to_network = config.allow_from_network = AllowList::parse(*allow);
+      } catch (const std::invalid_argument& e) {
+        return fail(kBadInput, fmt::format("--allow: {}", e.what()));
+      }
+    }
+    if (record) {
+      if (record->empty()) return fail(kBadInput, "--record: the path is empty");
+      config.record = *record;
+    }
     if (site_id) config.site_id = static_cast<std::uint8_t>(*site_id);
-    for (const auto& [value, name] :
-         {std::pair{&config.can_interface, "--can"}, {&config.bind, "--bind"}, {&config.peer, "--peer"}})
-      if (value->empty()) return fail(kBadInput, fmt::format("{} is required (see --help)", name));
+    if (peer_site_id) config.peer_site_id = static_cast<std::uint8_t>(*peer_site_id);
+    if (realtime_priority) config.realtime_priority = *realtime_priority;
+    config.stats_json = config.stats_json || stats_json;
+    config.insecure = insecure;  // only ever from the command line, where it is explicit
+    validate(config);
+    if (config.record && !config_file.empty()) {
+      std::error_code ec;
+      if (std::filesystem::equivalent(*config.record, config_file, ec)) {
+        return fail(kBadInput,
+                    fmt::format("record '{}' is the configuration file", shown_value(config.record->string())));
+      }
+    }
     if (config.insecure) {
       if (!config.key_file.empty()) return fail(kBadInput, "--insecure and --key exclude each other");
       fmt::print(stderr,
@@ -108,23 +161,32 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return fail(kBadInput, e.what());
   }
+  if (check_only) {
+    fmt::print("lever-bridge: configuration valid: {} <-> {} -> {}, key {}, allow to network {}, from network {}\n",
+               config.can_interface, config.bind, config.peer,
+               config.insecure ? "(insecure)" : config.key_file.string(), config.allow_to_network.describe(),
+               config.allow_from_network.describe());
+    return 0;
+  }
 
-  // SIGINT and SIGTERM are taken by the relay's signalfd; block them before any thread (the recorder's) starts.
+  // SIGINT, SIGTERM and SIGHUP are taken by the relay's signalfd: block them before any thread (the recorder's)
+  // starts.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   Relay relay;
   std::string error;
-  if (!relay.start(config, key, error)) return fail(1, error);
-  if (realtime_priority > 0) {
+  if (!relay.start(config, key, error)) return fail(kRuntimeFailure, error);
+  if (config.realtime_priority > 0) {
     // The recorder's writer thread started before this and keeps the normal policy: only the relay is real time.
-    const sched_param param{realtime_priority};
+    const sched_param param{config.realtime_priority};
     if (::sched_setscheduler(0, SCHED_FIFO, &param) != 0 || ::mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
-      return fail(1, fmt::format("--realtime-priority {}: {} (needs root or CAP_SYS_NICE and CAP_IPC_LOCK)",
-                                 realtime_priority, std::strerror(errno)));
+      return fail(kRuntimeFailure, fmt::format("realtime priority {}: {} (needs root or CAP_SYS_NICE and CAP_IPC_LOCK)",
+                                               config.realtime_priority, std::strerror(errno)));
   }
   fmt::print(stderr, "lever-bridge: {} <-> {} -> {} (allow to network {}, from network {})\n", config.can_interface,
              config.bind, config.peer, config.allow_to_network.describe(), config.allow_from_network.describe());

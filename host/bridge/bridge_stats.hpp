@@ -37,6 +37,9 @@ struct BridgeCounters {
   std::uint64_t malformed = 0;         // any other decode error (truncated, oversized, bad fields, not ours)
   std::uint64_t foreign_source = 0;    // from an address other than the peer
   std::uint64_t reflected = 0;         // carrying our own site id
+  std::uint64_t wrong_site = 0;        // carrying a site id other than the configured peer's
+  std::uint64_t stale = 0;             // authentic and new, but not echoing our epoch: sent before our start
+  std::uint64_t peer_epochs = 0;       // times the peer's epoch was learned (first contact, then its restarts)
   std::uint64_t duplicates = 0;        // replay window: seen before
   std::uint64_t too_old = 0;           // replay window: behind the window
   std::uint64_t reordered = 0;         // accepted, but older than the newest

@@ -63,6 +63,12 @@ CandumpRecorder::CandumpRecorder(RecorderConfig config)
       rotate_threshold_(config_.rotate_bytes) {
   pending_.reserve(kPendingBytes);
 
+  // Never write through a symlink or at a directory (lever-bridge refuses devices too, at configuration time; the
+  // recorder writes to one, /dev/full in its tests, but never renames it: see shift_files()).
+  if (struct stat st{}; ::lstat(config_.path.c_str(), &st) == 0 && (S_ISLNK(st.st_mode) || S_ISDIR(st.st_mode))) {
+    throw std::invalid_argument(fmt::format("candump recorder: '{}' is a {}; the log is a file of its own",
+                                            config_.path.string(), S_ISLNK(st.st_mode) ? "symlink" : "directory"));
+  }
   // Never truncate a previous recording: shift it away as a rotation would.
   std::error_code ec;
   if (fs::is_regular_file(config_.path, ec) && fs::file_size(config_.path, ec) > 0 && !ec) {
@@ -295,6 +301,11 @@ void CandumpRecorder::rotate() {
 // path.<keep-1> -> path.<keep>, ..., path -> path.1 (path.<keep> deleted first). False if path stays in place.
 bool CandumpRecorder::shift_files() {
   const fs::path& base = config_.path;
+  // Only our own log moves: a device (or anything else put at the path since) stays where it is.
+  if (struct stat st{}; ::lstat(base.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    note_error("will not rotate", base.native(), EINVAL);
+    return false;
+  }
   if (config_.keep_files == 0) {
     if (::unlink(base.c_str()) != 0 && errno != ENOENT) {
       note_error("cannot delete", base.native(), errno);
@@ -322,7 +333,7 @@ bool CandumpRecorder::shift_files() {
 }
 
 int CandumpRecorder::open_file(bool truncate) {
-  const int flags = O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | (truncate ? O_TRUNC : 0);
+  const int flags = O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOFOLLOW | (truncate ? O_TRUNC : 0);
   const int fd = ::open(config_.path.c_str(), flags, 0644);
   if (fd < 0) {
     const int error = errno;

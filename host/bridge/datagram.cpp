@@ -206,6 +206,8 @@ EncodeResult encode(const Datagram& d, const Key& key, std::span<std::uint8_t> o
   writer.u8(static_cast<std::uint8_t>(d.frame_count));
   writer.u64(d.sequence);
   writer.u64(d.timestamp_us);
+  writer.u64(d.epoch);
+  writer.u64(d.peer_epoch);
   if (d.kind == Kind::data) {
     for (std::size_t i = 0; i < d.frame_count; ++i) {
       const auto& frame = d.frames[i];
@@ -248,7 +250,7 @@ WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out
   std::uint8_t count = 0;
   const bool complete = header.u8(ignored) && header.u8(ignored) && header.u8(ignored) && header.u8(flags) &&
                         header.u8(out.sender) && header.u8(count) && header.u64(out.sequence) &&
-                        header.u64(out.timestamp_us);
+                        header.u64(out.timestamp_us) && header.u64(out.epoch) && header.u64(out.peer_epoch);
   WireError error = complete ? WireError::none : WireError::truncated;  // complete: the length was checked
   if (error == WireError::none) {
     error = decode_body(flags, count, in.subspan(kHeaderSize, authenticated - kHeaderSize), out);

@@ -19,18 +19,19 @@ namespace lever::bridge {
 // ---- Sizes (docs/datagram-format.md, "Layout") ----
 inline constexpr std::uint8_t kMagic0 = 0x4C;  // 'L'
 inline constexpr std::uint8_t kMagic1 = 0x42;  // 'B'
-inline constexpr std::uint8_t kVersion = 1;
-inline constexpr std::size_t kHeaderSize = 22;  // magic, version, flags, sender, count, sequence, timestamp
-inline constexpr std::size_t kTagSize = 32;     // crypto_auth_hmacsha512256_BYTES
+inline constexpr std::uint8_t kVersion = 2;    // 2: the epochs (docs/datagram-format.md, "Restarts")
+// magic, version, flags, sender, count, sequence, timestamp, epoch, peer epoch
+inline constexpr std::size_t kHeaderSize = 38;
+inline constexpr std::size_t kTagSize = 32;  // crypto_auth_hmacsha512256_BYTES
 inline constexpr std::size_t kMaxFrames = 32;
 inline constexpr std::size_t kFrameHeaderSize = 3;  // id (2), dlc (1)
 inline constexpr std::size_t kMaxDlc = 8;           // classic CAN
 inline constexpr std::size_t kMaxFrameSize = kFrameHeaderSize + kMaxDlc;
 inline constexpr std::size_t kProbeBodySize = 24;  // echo sequence, echo timestamp, receive timestamp
-inline constexpr std::size_t kMinDatagramSize = kHeaderSize + kTagSize;                               // 54
-inline constexpr std::size_t kProbeDatagramSize = kHeaderSize + kProbeBodySize + kTagSize;            // 78
-inline constexpr std::size_t kMaxDatagramSize = kHeaderSize + kMaxFrames * kMaxFrameSize + kTagSize;  // 406
-static_assert(kMaxDatagramSize == 406 && kMaxDatagramSize < 1200);
+inline constexpr std::size_t kMinDatagramSize = kHeaderSize + kTagSize;                               // 70
+inline constexpr std::size_t kProbeDatagramSize = kHeaderSize + kProbeBodySize + kTagSize;            // 94
+inline constexpr std::size_t kMaxDatagramSize = kHeaderSize + kMaxFrames * kMaxFrameSize + kTagSize;  // 422
+static_assert(kMaxDatagramSize == 422 && kMaxDatagramSize < 1200);
 
 // Flags byte (offset 3).
 inline constexpr std::uint8_t kFlagProbe = 0x01;
@@ -78,6 +79,8 @@ struct Datagram {
   std::uint8_t sender = 0;         // the sending site's id; a receiver rejects its own id (reflection)
   std::uint64_t sequence = 0;      // per sender and key, never reused; see replay_window.hpp
   std::uint64_t timestamp_us = 0;  // sender's steady clock when sent, microseconds
+  std::uint64_t epoch = 0;         // the sender's epoch: random, drawn at start, never 0 (peer_session.hpp)
+  std::uint64_t peer_epoch = 0;    // the receiver's epoch as the sender last learned it; 0: none yet
   std::size_t frame_count = 0;     // data only, 0..kMaxFrames
   std::array<protocol::CanFrame, kMaxFrames> frames{};  // decode() zeroes data bytes beyond each dlc
   ProbeEcho echo{};                                     // probe_reply only
@@ -105,7 +108,7 @@ std::size_t encoded_size(const Datagram& datagram) noexcept;
 // oversized datagram is seen as such, not cut). Checks, in this order: length at least 3, magic, version, length
 // within [kMinDatagramSize, kMaxDatagramSize], the tag; only then flags, count, frames and probe fields.
 // On success `out` holds the datagram; on error `out` is reset to Datagram{}.
-// Authenticity is not freshness: pass out.sequence to a ReplayWindow afterwards.
+// Authenticity is not freshness: pass the datagram to a PeerSession (peer_session.hpp) afterwards.
 [[nodiscard]] WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out) noexcept;
 
 // ---- Probes (docs/datagram-format.md, "Probe") ----

@@ -11,6 +11,8 @@
 #include <cerrno>
 #include <system_error>
 
+#include "shown_value.hpp"
+
 namespace lever::bridge {
 
 static_assert(kKeySize == crypto_auth_hmacsha512256_KEYBYTES);
@@ -75,6 +77,13 @@ Key generate_key() {
   return key;
 }
 
+std::uint64_t generate_epoch() {
+  if (!init_crypto()) throw KeyError("cannot initialise libsodium (no random number generator?)");
+  std::uint64_t epoch = 0;
+  while (epoch == 0) randombytes_buf(&epoch, sizeof epoch);
+  return epoch;
+}
+
 std::string format_key(const Key& key) {
   static constexpr char kDigits[] = "0123456789abcdef";
   std::string text;
@@ -125,11 +134,11 @@ Key parse_key(std::string_view text, std::string_view origin) {
 }
 
 Key load_key_file(const std::filesystem::path& path) {
-  const std::string name = path.string();
+  const std::string name = shown_value(path.string(), 200);
   FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK));
   if (fd.get() < 0) {
     const int error = errno;
-    throw KeyError(fmt::format("key file {}: cannot open: {}", name, errno_text(error)));
+    throw KeyError(fmt::format("key file {}: cannot open: {}", name, errno_text(error)), error);
   }
   struct stat info {};
   if (::fstat(fd.get(), &info) != 0) {
@@ -165,12 +174,13 @@ Key load_key_file(const std::filesystem::path& path) {
 }
 
 void write_key_file(const std::filesystem::path& path, const Key& key) {
-  const std::string name = path.string();
+  const std::string name = shown_value(path.string(), 200);
   FileDescriptor fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600));
   if (fd.get() < 0) {
     const int error = errno;
     throw KeyError(fmt::format("key file {}: cannot create{}: {}", name,
-                               error == EEXIST ? " (it exists; a key is never overwritten)" : "", errno_text(error)));
+                               error == EEXIST ? " (it exists; a key is never overwritten)" : "", errno_text(error)),
+                   error);
   }
   // The umask can only remove bits, but make the mode exact anyway.
   if (::fchmod(fd.get(), 0600) != 0) {
@@ -194,7 +204,7 @@ void write_key_file(const std::filesystem::path& path, const Key& key) {
   if (fd.close() != 0 && error == 0) error = errno;
   if (error != 0) {
     ::unlink(path.c_str());
-    throw KeyError(fmt::format("key file {}: cannot write: {}", name, errno_text(error)));
+    throw KeyError(fmt::format("key file {}: cannot write: {}", name, errno_text(error)), error);
   }
 }
 

@@ -29,7 +29,12 @@ struct Key {
 // A key file that cannot be used; what() names the file and the remedy.
 class KeyError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit KeyError(const std::string& what, int error_number = 0) : std::runtime_error(what), errno_(error_number) {}
+  // The errno of the failed system call, 0 for a key that is there but wrong.
+  int error_number() const noexcept { return errno_; }
+
+ private:
+  int errno_;
 };
 
 // Initialises libsodium (idempotent, thread-safe). encode/decode and the functions below call it themselves;
@@ -38,6 +43,10 @@ bool init_crypto() noexcept;
 
 // 32 bytes from libsodium's CSPRNG. Throws KeyError if libsodium cannot be initialised.
 Key generate_key();
+
+// A bridge's epoch for one run (peer_session.hpp): 64 bits from libsodium's CSPRNG, never 0. Throws KeyError if
+// libsodium cannot be initialised.
+std::uint64_t generate_epoch();
 
 // The key file's content: 64 lowercase hex digits and a newline.
 std::string format_key(const Key& key);

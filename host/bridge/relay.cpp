@@ -25,6 +25,21 @@ std::int64_t clock_us(clockid_t clock) {
 std::int64_t steady_us() { return clock_us(CLOCK_MONOTONIC); }
 std::int64_t wall_us() { return clock_us(CLOCK_REALTIME); }
 
+// What to do when the CAN socket cannot be opened: the kernel may lack CAN altogether, or the interface is missing.
+std::string can_open_hint(int error, const std::string& interface) {
+  if (error == EAFNOSUPPORT || error == EPROTONOSUPPORT) {
+    return "; this kernel has no CAN protocol family loaded: load it with `modprobe can-raw` (a virtual bus "
+           "also needs `modprobe vcan`), or use a kernel built with CONFIG_CAN and CONFIG_CAN_RAW";
+  }
+  if (error == ENODEV) {
+    return fmt::format(
+        "; `ip link show {0}` lists it when it exists. A real controller: `ip link set {0} up type can bitrate "
+        "1000000`; a virtual one: `modprobe vcan && ip link add dev {0} type vcan && ip link set {0} up`",
+        interface);
+  }
+  return {};
+}
+
 // A bound on work per wake-up, so one busy direction cannot starve the other.
 constexpr int kMaxDatagramsPerWakeup = 64;
 
@@ -34,6 +49,16 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   config_ = config;
   key_ = key;
   site_id_ = config.site_id ? *config.site_id : static_cast<std::uint8_t>(randombytes_uniform(256));
+  if (config.peer_site_id && site_id_ == *config.peer_site_id) {
+    // Only a random site id can meet the configured peer's (validate() refuses two equal configured ones).
+    site_id_ = static_cast<std::uint8_t>(site_id_ + 1 + randombytes_uniform(255));
+  }
+  try {
+    session_ = PeerSession<1024>(generate_epoch());
+  } catch (const KeyError& e) {
+    error = e.what();
+    return false;
+  }
   // Sequence numbers start at the wall clock in microseconds, so a restarted bridge is ahead of its old ones
   // and the peer's replay window accepts it (docs/datagram-format.md).
   next_sequence_ = static_cast<std::uint64_t>(wall_us());
@@ -57,7 +82,7 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   can_config.interface = config.can_interface;
   auto can = platform::SocketCan::open(can_config);
   if (!can) {
-    error = can.error().message;
+    error = can.error().message + can_open_hint(can.error().errno_value, config.can_interface);
     return false;
   }
   can_.emplace(std::move(can).value());
@@ -66,6 +91,7 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
   signal_fd_.reset(::signalfd(-1, &signals, SFD_NONBLOCK | SFD_CLOEXEC));
   timer_fd_.reset(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   if (!signal_fd_ || !timer_fd_) {
@@ -96,6 +122,8 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
 
 bool Relay::send(Datagram& d) {
   d.sender = site_id_;
+  d.epoch = session_.own_epoch();
+  d.peer_epoch = session_.peer_epoch();
   d.sequence = next_sequence_++;
   d.timestamp_us = static_cast<std::uint64_t>(steady_us());
   std::array<std::uint8_t, kMaxDatagramSize> buffer;
@@ -171,17 +199,33 @@ void Relay::relay_network_to_can() {
       }
       continue;
     }
-    const auto verdict = window_.accept(d.sequence);
-    if (verdict.verdict == ReplayVerdict::duplicate) {
+    if (config_.peer_site_id && d.sender != *config_.peer_site_id) {
+      ++counters_.wrong_site;
+      continue;
+    }
+    const auto admitted = session_.admit(d.sequence, d.epoch, d.peer_epoch);
+    if (admitted.admission == Admission::duplicate) {
       ++counters_.duplicates;
       continue;
     }
-    if (verdict.verdict == ReplayVerdict::too_old) {
+    if (admitted.admission == Admission::too_old) {
       ++counters_.too_old;
       continue;
     }
-    if (verdict.reordered()) ++counters_.reordered;
-    counters_.sequence_gaps += verdict.gap;
+    if (admitted.replay.reordered()) ++counters_.reordered;
+    counters_.sequence_gaps += admitted.replay.gap;
+    if (admitted.peer_epoch_changed) {
+      // First contact or a restarted peer: it takes our datagrams only once they echo its new epoch, so one goes
+      // out now rather than at the next probe or CAN frame.
+      ++counters_.peer_epochs;
+      send_probe();
+    }
+    if (!admitted.fresh()) {
+      ++counters_.stale;
+      // A stale probe request is still answered: the reply echoes the requester's epoch, which is how a restarted
+      // peer starts to take our traffic. Nothing else of a stale datagram is acted on.
+      if (d.kind != Kind::probe_request) continue;
+    }
 
     switch (d.kind) {
       case Kind::probe_request: {
@@ -240,6 +284,13 @@ void Relay::check_can() {
   fmt::print(stderr, "lever-bridge: {} is back\n", config_.can_interface);
 }
 
+void Relay::send_probe() {
+  last_probe_us_ = steady_us();
+  Datagram probe;
+  probe.kind = Kind::probe_request;
+  if (send(probe)) ++counters_.probes_sent;
+}
+
 void Relay::on_timer() {
   std::uint64_t expirations = 0;
   while (::read(timer_fd_.get(), &expirations, sizeof expirations) > 0) {
@@ -249,12 +300,7 @@ void Relay::on_timer() {
     last_can_check_us_ = now;
     check_can();
   }
-  if (now - last_probe_us_ >= static_cast<std::int64_t>(config_.probe_interval_s * 1e6)) {
-    last_probe_us_ = now;
-    Datagram probe;
-    probe.kind = Kind::probe_request;
-    if (send(probe)) ++counters_.probes_sent;
-  }
+  if (now - last_probe_us_ >= static_cast<std::int64_t>(config_.probe_interval_s * 1e6)) send_probe();
   const double interval = static_cast<double>(now - last_stats_us_) * 1e-6;
   if (config_.stats_json && interval >= config_.stats_interval_s) {
     print_stats(interval);
@@ -291,6 +337,9 @@ void Relay::print_stats(double interval_s) {
         {"malformed", c.malformed},
         {"foreign_source", c.foreign_source},
         {"reflected", c.reflected},
+        {"wrong_site", c.wrong_site},
+        {"stale", c.stale},
+        {"peer_epochs", c.peer_epochs},
         {"can_down_drops", c.can_down_drops},
         {"can_tx_full", c.can_tx_full}}},
       {"latency_us",
@@ -330,7 +379,7 @@ int Relay::run() {
       fmt::print(stderr, "lever-bridge: poll: {}\n", std::strerror(errno));
       return 1;
     }
-    if (fds[0].revents & POLLIN) break;  // SIGINT or SIGTERM
+    if (fds[0].revents & POLLIN) break;  // SIGINT, SIGTERM or SIGHUP
     if (fds[3].revents & (POLLIN | POLLERR)) relay_can_to_network();
     if (fds[2].revents & POLLIN) relay_network_to_can();
     if (fds[2].revents & POLLERR) counters_.peer_unreachable += static_cast<std::uint64_t>(udp_->drain_errors());

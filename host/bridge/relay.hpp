@@ -12,7 +12,7 @@
 #include "lever/platform/socketcan.hpp"
 #include "lever/platform/udp_socket.hpp"
 #include "lever/platform/unique_fd.hpp"
-#include "replay_window.hpp"
+#include "peer_session.hpp"
 
 namespace lever::bridge {
 
@@ -20,7 +20,7 @@ class Relay {
  public:
   // Everything that can fail at start-up fails here, with a message: returns false and sets `error`.
   bool start(const BridgeConfig& config, const Key& key, std::string& error);
-  // Runs until SIGINT or SIGTERM (which must be blocked in every thread before start()). Returns the exit code.
+  // Runs until SIGINT, SIGTERM or SIGHUP (blocked in every thread before start()). Returns the exit code.
   int run();
 
   const BridgeCounters& counters() const { return counters_; }
@@ -33,6 +33,7 @@ class Relay {
   bool send(Datagram& d);
   void print_stats(double interval_s);
   void check_can();
+  void send_probe();
 
   BridgeConfig config_;
   Key key_{};
@@ -42,7 +43,7 @@ class Relay {
   platform::SocketAddress peer_;
   platform::UniqueFd signal_fd_, timer_fd_;
   std::unique_ptr<CandumpRecorder> recorder_;
-  ReplayWindow<1024> window_;
+  PeerSession<1024> session_;
   std::uint64_t next_sequence_ = 0;
   BridgeCounters counters_;
   BridgeCounters at_last_stats_;

@@ -59,7 +59,8 @@ std::optional<SocketAddress> parse_socket_address(const std::string& text, std::
     host = text.substr(0, colon);
     port = text.substr(colon + 1);
   }
-  if (host.empty() || port.empty() || port.find_first_not_of("0123456789") != std::string::npos ||
+  // At most five digits before stoul, which would throw on a number beyond unsigned long.
+  if (host.empty() || port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
       std::stoul(port) > 65535) {
     error = "'" + text + "': expected HOST:PORT with a port from 0 to 65535";
     return std::nullopt;

@@ -70,6 +70,8 @@ Datagram data_datagram(std::initializer_list<CanFrame> frames) {
   d.sender = 1;
   d.sequence = 1000;
   d.timestamp_us = 123456789;
+  d.epoch = 0xE90C;
+  d.peer_epoch = 0x9EE7;
   for (const auto& f : frames) d.frames[d.frame_count++] = f;
   return d;
 }
@@ -79,6 +81,8 @@ Datagram random_datagram(lever::Rng& rng, std::size_t count) {
   d.sender = static_cast<std::uint8_t>(rng.next());
   d.sequence = rng.next();
   d.timestamp_us = rng.next();
+  d.epoch = rng.next();
+  d.peer_epoch = rng.next();
   d.frame_count = count;
   for (std::size_t i = 0; i < count; ++i) {
     auto& f = d.frames[i];
@@ -103,6 +107,8 @@ void check_same(const Datagram& a, const Datagram& b) {
   CHECK(a.sender == b.sender);
   CHECK(a.sequence == b.sequence);
   CHECK(a.timestamp_us == b.timestamp_us);
+  CHECK(a.epoch == b.epoch);
+  CHECK(a.peer_epoch == b.peer_epoch);
   CHECK(a.echo == b.echo);
   REQUIRE(a.frame_count == b.frame_count);
   for (std::size_t i = 0; i < a.frame_count; ++i) {
@@ -134,9 +140,10 @@ TEST_CASE("error codes keep their numbers and names", "[bridge][datagram]") {
 }
 
 TEST_CASE("sizes are the spec's", "[bridge][datagram]") {
-  STATIC_REQUIRE(kMinDatagramSize == 54);
-  STATIC_REQUIRE(kProbeDatagramSize == 78);
-  STATIC_REQUIRE(kMaxDatagramSize == 406);
+  STATIC_REQUIRE(kHeaderSize == 38);
+  STATIC_REQUIRE(kMinDatagramSize == 70);
+  STATIC_REQUIRE(kProbeDatagramSize == 94);
+  STATIC_REQUIRE(kMaxDatagramSize == 422);
   CHECK(encode_bytes(the_largest(), test_key()).size() == kMaxDatagramSize);
   CHECK(encode_bytes(data_datagram({}), test_key()).size() == kMinDatagramSize);
 }
@@ -147,6 +154,8 @@ TEST_CASE("the layout is the spec's, byte for byte", "[bridge][datagram]") {
   d.sender = 1;
   d.sequence = 0x0102030405060708;
   d.timestamp_us = 0x00000000DEADBEEF;
+  d.epoch = 0x1122334455667788;
+  d.peer_epoch = 0x99AABBCCDDEEFF00;
   d.frame_count = 2;
   d.frames[0] = frame(0x101, {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88});
   d.frames[1] = frame(0x703, {0x02});
@@ -154,9 +163,11 @@ TEST_CASE("the layout is the spec's, byte for byte", "[bridge][datagram]") {
   const Key key = test_key();
   const Bytes bytes = encode_bytes(d, key);
   const Bytes expected_content = {
-      0x4C, 0x42, 0x01, 0x00, 0x01, 0x02,                                // magic "LB", version 1, flags, sender, count
+      0x4C, 0x42, 0x02, 0x00, 0x01, 0x02,                                // magic "LB", version 2, flags, sender, count
       0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,                    // sequence
       0x00, 0x00, 0x00, 0x00, 0xDE, 0xAD, 0xBE, 0xEF,                    // timestamp, us
+      0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,                    // epoch
+      0x99, 0xAA, 0xBB, 0xCC, 0xDD, 0xEE, 0xFF, 0x00,                    // peer epoch
       0x01, 0x01, 0x08, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // id 0x101, dlc 8, data
       0x07, 0x03, 0x01, 0x02,                                            // id 0x703, dlc 1, data
   };
@@ -166,9 +177,9 @@ TEST_CASE("the layout is the spec's, byte for byte", "[bridge][datagram]") {
   crypto_auth_hmacsha512256(tag.data(), expected_content.data(), expected_content.size(), key.bytes.data());
   CHECK(std::equal(tag.begin(), tag.end(), bytes.end() - kTagSize));
   // A known answer, computed independently (Python: hmac.new(key, content, hashlib.sha512).digest()[:32]).
-  const Bytes known_tag = {0x95, 0x26, 0x82, 0x06, 0x36, 0x3d, 0x7c, 0x9d, 0x18, 0xa8, 0x83,
-                           0xe8, 0xc3, 0x10, 0x12, 0xe8, 0x38, 0x3c, 0x3e, 0xe5, 0x42, 0x25,
-                           0xcd, 0x00, 0x8b, 0x54, 0x7e, 0x5d, 0x4f, 0x43, 0xaa, 0x97};
+  const Bytes known_tag = {0xda, 0x9b, 0x33, 0x4a, 0x26, 0x3d, 0xb4, 0xca, 0x13, 0x96, 0x0d,
+                           0x43, 0x60, 0x06, 0x45, 0x9e, 0x3c, 0xe3, 0x80, 0x72, 0xc3, 0x53,
+                           0x58, 0xe3, 0xd5, 0x33, 0xb9, 0x33, 0xdd, 0xd3, 0xbe, 0xe4};
   CHECK(Bytes(bytes.end() - kTagSize, bytes.end()) == known_tag);
 
   Datagram decoded;
@@ -199,7 +210,7 @@ TEST_CASE("probes: layout, round trip and the clock arithmetic", "[bridge][datag
   const Bytes reply_bytes = encode_bytes(reply, key);
   REQUIRE(reply_bytes.size() == kProbeDatagramSize);
   CHECK(reply_bytes[3] == (kFlagProbe | kFlagReply));
-  CHECK(reply_bytes[22 + 7] == 77);  // echo sequence, big-endian
+  CHECK(reply_bytes[kHeaderSize + 7] == 77);  // echo sequence, big-endian
   Datagram back;
   REQUIRE(decode_bytes(reply_bytes, key, back) == WireError::none);
   check_same(back, reply);
@@ -309,7 +320,7 @@ TEST_CASE("another magic or version is named before the tag", "[bridge][datagram
     CHECK(decode_bytes(wrong, key) == WireError::bad_magic);
     CHECK(decode_bytes(resigned(bytes, key, [at](Bytes& c) { c[at] ^= 0x20; }), key) == WireError::bad_magic);
   }
-  for (const std::uint8_t version : {std::uint8_t{0}, std::uint8_t{2}, std::uint8_t{255}}) {
+  for (const std::uint8_t version : {std::uint8_t{0}, std::uint8_t{1}, std::uint8_t{3}, std::uint8_t{255}}) {
     CHECK(decode_bytes(resigned(bytes, key, [version](Bytes& c) { c[2] = version; }), key) == WireError::bad_version);
     Bytes short_one = {0x4C, 0x42, version};  // a version mismatch is told even for a short datagram
     CHECK(decode_bytes(short_one, key) == WireError::bad_version);
@@ -345,15 +356,16 @@ TEST_CASE("each field out of range, in an authentic datagram", "[bridge][datagra
     for (const unsigned id : {0x800u, 0x0FFFu, 0x8100u, 0xFFFFu}) {
       CAPTURE(id);
       CHECK(decode_edited(data, [id](Bytes& c) {
-              c[22] = static_cast<std::uint8_t>(id >> 8);
-              c[23] = static_cast<std::uint8_t>(id);
+              c[kHeaderSize] = static_cast<std::uint8_t>(id >> 8);
+              c[kHeaderSize + 1] = static_cast<std::uint8_t>(id);
             }) == WireError::bad_id);
     }
-    CHECK(decode_edited(data, [](Bytes& c) { c[22 + 5] = 0x08; }) == WireError::bad_id);  // the second frame
+    CHECK(decode_edited(data, [](Bytes& c) { c[kHeaderSize + 5] = 0x08; }) == WireError::bad_id);  // the second frame
   }
   SECTION("dlc above 8") {
     for (const int dlc : {9, 15, 64, 255}) {
-      CHECK(decode_edited(data, [dlc](Bytes& c) { c[24] = static_cast<std::uint8_t>(dlc); }) == WireError::bad_dlc);
+      CHECK(decode_edited(data, [dlc](Bytes& c) { c[kHeaderSize + 2] = static_cast<std::uint8_t>(dlc); }) ==
+            WireError::bad_dlc);
     }
   }
   SECTION("probes") {
@@ -404,10 +416,12 @@ TEST_CASE("a failed decode leaves an empty datagram", "[bridge][datagram][errors
   REQUIRE(decode_bytes(bytes, key, out) == WireError::none);
   CHECK(out.frame_count == 2);
   // Fails after the first frame was parsed.
-  const Bytes bad = resigned(bytes, key, [](Bytes& c) { c[22 + 5 + 2] = 9; });
+  const Bytes bad = resigned(bytes, key, [](Bytes& c) { c[kHeaderSize + 5 + 2] = 9; });
   REQUIRE(decode_bytes(bad, key, out) == WireError::bad_dlc);
   CHECK(out.frame_count == 0);
   CHECK(out.sequence == 0);
+  CHECK(out.epoch == 0);
+  CHECK(out.peer_epoch == 0);
   CHECK(out.frames[0].id == 0);
   REQUIRE(decode_bytes(bytes, key, out) == WireError::none);
   REQUIRE(decode_bytes(bytes, test_key(9), out) == WireError::bad_tag);

@@ -78,6 +78,102 @@ site_id = 7
                     Catch::Contains("beyond 11 bits"));
 }
 
+TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, naming key and value",
+          "[bridge][config]") {
+  const auto refused = [](const std::string& content, const std::string& message) {
+    BridgeConfig c;
+    CAPTURE(content);
+    CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-number.toml", content), c), Catch::Contains(message));
+  };
+  refused("stats_interval_s = nan\n", "key 'stats_interval_s': must be a time in seconds from 0.01 to 3600, got nan");
+  refused("probe_interval_s = inf\n", "key 'probe_interval_s': must be a time in seconds from 0.01 to 3600, got inf");
+  refused("probe_interval_s = 0.001\n", "got 0.001");
+  refused("record_rotate_mb = nan\n", "key 'record_rotate_mb'");
+  refused("record_rotate_mb = -1\n", "got -1");
+  refused("record_rotate_mb = 1e300\n", "got 1e+300");
+  refused("record_keep_files = 2.5\n", "key 'record_keep_files': must be an integer from 1 to 1000, got 2.5");
+  refused("record_keep_files = nan\n", "got nan");
+  refused("can_bitrate = 500000.5\n", "key 'can_bitrate': must be an integer from 10000 to 1000000, got 500000.5");
+  refused("can_bitrate = nan\n", "key 'can_bitrate'");
+  refused("site_id = 2.5\n", "key 'site_id': must be an integer from 0 to 255, got 2.5");
+  refused("site_id = -1\n", "got -1");
+  refused("peer_site_id = 256\n", "key 'peer_site_id': must be an integer from 0 to 255, got 256");
+  refused("realtime_priority = 0\n", "key 'realtime_priority': must be an integer from 1 to 99, got 0");
+  refused("realtime_priority = 100\n", "got 100");
+  refused("site_id = \"7\"\n", "got '7'");
+  refused("stats_json = 1\n", "key 'stats_json': expected true or false, got 1");
+  refused("can = \"\"\n", "key 'can': must not be empty");
+  refused("allow = \"\"\n", "key 'allow'");
+
+  BridgeConfig c;
+  load_config_file(write_temp("lever-bridge-numbers-ok.toml",
+                              "can_bitrate = 5e5\nrecord_keep_files = 3.0\nrealtime_priority = 70\npeer_site_id = 1\n"),
+                   c);
+  CHECK(c.can_bitrate == 500000);  // a float with no fraction is an integer
+  CHECK(c.record_keep_files == 3);
+  CHECK(c.realtime_priority == 70);
+  REQUIRE(c.peer_site_id);
+  CHECK(*c.peer_site_id == 1);
+}
+
+TEST_CASE("config paths are relative to the configuration file", "[bridge][config]") {
+  const auto dir = std::filesystem::temp_directory_path() / "lever-bridge-relative";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "bridge.toml") << "key = \"site.key\"\nrecord = \"logs/a.log\"\n";
+  BridgeConfig c;
+  load_config_file(dir / "bridge.toml", c);
+  CHECK(c.key_file == dir / "site.key");
+  REQUIRE(c.record);
+  CHECK(*c.record == dir / "logs/a.log");
+  std::ofstream(dir / "bridge.toml") << "key = \"/etc/lever/site.key\"\n";
+  load_config_file(dir / "bridge.toml", c);
+  CHECK(c.key_file == "/etc/lever/site.key");
+}
+
+TEST_CASE("the merged configuration: addresses, interface name and site ids", "[bridge][config]") {
+  const auto base = [] {
+    BridgeConfig c;
+    c.can_interface = "vcan0";
+    c.bind = "127.0.0.1:5000";
+    c.peer = "127.0.0.1:5001";
+    return c;
+  };
+  CHECK_NOTHROW(validate(base()));
+  const auto refused = [&](auto edit, const std::string& message) {
+    BridgeConfig c = base();
+    edit(c);
+    CHECK_THROWS_WITH(validate(c), Catch::Contains(message));
+  };
+  refused([](BridgeConfig& c) { c.peer = "127.0.0.1:0"; }, "peer '127.0.0.1:0': port 0");
+  refused([](BridgeConfig& c) { c.bind = "127.0.0.1:0"; }, "bind '127.0.0.1:0': port 0");
+  refused([](BridgeConfig& c) { c.peer = "255.255.255.255:5001"; }, "a broadcast address");
+  refused([](BridgeConfig& c) { c.peer = "239.1.2.3:5001"; }, "a multicast address");
+  refused([](BridgeConfig& c) { c.peer = "[ff02::1]:5001"; }, "a multicast address");
+  refused([](BridgeConfig& c) { c.peer = "0.0.0.0:5001"; }, "the unspecified address");
+  refused([](BridgeConfig& c) { c.peer = "127.0.0.1:5000"; }, "this bridge's own address");
+  refused(
+      [](BridgeConfig& c) {
+        c.bind = "0.0.0.0:5000";
+        c.peer = "127.0.0.1:5000";
+      },
+      "this bridge's own address");
+  refused([](BridgeConfig& c) { c.peer = "[::1]:5001"; }, "different address families");
+  refused([](BridgeConfig& c) { c.peer = "127.0.0.1:99999999999999999999999"; }, "port from 0 to 65535");
+  refused([](BridgeConfig& c) { c.bind = "224.0.0.1:5000"; }, "bind '224.0.0.1:5000': a multicast address");
+  refused([](BridgeConfig& c) { c.can_interface = "a-name-far-too-long"; }, "not an interface name");
+  refused([](BridgeConfig& c) { c.can_interface = "../can0"; }, "not an interface name");
+  refused([](BridgeConfig& c) { c.can_interface.clear(); }, "--can (key 'can') is required");
+  refused(
+      [](BridgeConfig& c) {
+        c.site_id = 3;
+        c.peer_site_id = 3;
+      },
+      "site_id and peer_site_id are both 3");
+  BridgeConfig any = base();
+  any.bind = "0.0.0.0:5000";  // every local address, a peer on another port of this host: fine
+  CHECK_NOTHROW(validate(any));
+}
+
 TEST_CASE("latency percentiles come out of the histogram within a bucket", "[bridge][stats]") {
   LatencyHistogram h;
   CHECK_FALSE(h.percentile(0.5).has_value());

@@ -10,17 +10,21 @@ source "$(dirname "$0")/lib.sh"
 
 # Exact lines that are examples but cannot run in a test, and why.
 declare -A skip=(
-  ["lever-bridge --can can0 --bind 0.0.0.0:5000 --peer 192.0.2.7:5000 --key site.key --record site-a.log --stats-json"]="needs a CAN interface can0 and a peer at 192.0.2.7 (tests/kernel runs the bridge on a kernel CAN stack)"
+  ["lever-bridge --can can0 --bind 0.0.0.0:5000 --peer 192.0.2.7:5000 --key site.key --site-id 1 --peer-site-id 2 --record site-a.log --stats-json"]="needs a CAN interface can0 and a peer at 192.0.2.7 (tests/kernel runs the bridge on a kernel CAN stack)"
+  ["lever-bridge --config bridge.toml --check-config                # validate the file and the key; open nothing"]="needs the reader's bridge.toml (tests/cli/lever_bridge_cli.sh checks --check-config on its own files)"
   ["lever-bridge --config bridge.toml                               # the same options from a file"]="needs a bridge.toml naming a CAN interface (tests/kernel)"
   ["lever-fw --config top.toml --stats-json"]="runs the board's hardware (tests/kernel runs lever-fw on gpio-sim)"
 )
 
-# The programs on PATH and under build/bin, as the docs call them; the example configurations where the
-# README names them, and a top.toml of the reader's own (bring-up.md) as the example one.
-mkdir -p "$work/run/build" "$work/run/firmware"
-ln -s "$bin" "$work/run/build/bin"
-cp -r "$src/firmware/config" "$work/run/firmware/config"
-cp "$src/firmware/config/top.toml" "$src/firmware/config/hsi.toml" "$work/run/"
+# Each document's examples run in order in a directory of their own, with the programs on PATH and under
+# build/bin as the docs call them, the example configurations where the README names them, and a top.toml of
+# the reader's own (bring-up.md) as the example one.
+setup() {
+  mkdir -p "$1/build" "$1/firmware"
+  ln -s "$bin" "$1/build/bin"
+  cp -r "$src/firmware/config" "$1/firmware/config"
+  cp "$src/firmware/config/top.toml" "$src/firmware/config/hsi.toml" "$1/"
+}
 export PATH="$bin:$PATH"
 
 is_synopsis() { [[ $1 =~ \[|[a-z0-9]\|[a-z-]|\ \|\ -|\ [A-Z][A-Z_]*([\ :]|$) ]]; }
@@ -28,8 +32,13 @@ is_synopsis() { [[ $1 =~ \[|[a-z0-9]\|[a-z-]|\ \|\ -|\ [A-Z][A-Z_]*([\ :]|$) ]];
 examples=0 ran=0 skipped=0
 for doc in "$src/README.md" "$src"/docs/*.md; do
   name=${doc#"$src/"}
-  in_block=0 last_output=""
+  in_block=0 last_output="" pending=""
+  dir="$work/run/$(basename "$doc" .md)"
+  setup "$dir"
   while IFS= read -r line; do
+    # A command continued with a backslash is one command.
+    if [ "$in_block" = 1 ] && [[ $line == *\\ ]]; then pending+="${line%\\}"; continue; fi
+    if [ -n "$pending" ]; then line="${pending% } ${line#"${line%%[! ]*}"}"; pending=""; fi
     if [[ $line == '```'* ]]; then in_block=$((1 - in_block)); continue; fi
     [ "$in_block" = 1 ] || continue
     # A documented output under the last command: its numbers must be what the command printed.
@@ -55,7 +64,7 @@ for doc in "$src/README.md" "$src"/docs/*.md; do
       continue
     fi
     ran=$((ran + 1))
-    last_output=$(cd "$work/run" && timeout 120 bash -c "$line" 2>"$work/err")
+    last_output=$(cd "$dir" && timeout 120 bash -c "$line" 2>"$work/err")
     code=$?
     check "$name: '$line' exits 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0
   done <"$doc"

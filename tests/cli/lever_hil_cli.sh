@@ -22,6 +22,14 @@ expect_bad "unknown scenario" "--scenario" run --scenario moonwalk
 expect_bad "negative p" "--p" run --p -1
 expect_bad "bad fault kind" "unknown kind 'meteor'" run --fault meteor@1
 expect_bad "bad fault time" "start 'soon'" run --fault link-down@soon
+expect_bad "gauge filter not a number" "--gauge-filter-hz" run --gauge-filter-hz nan
+expect_bad "gauge filter out of range" "--gauge-filter-hz" run --gauge-filter-hz 500
+expect_bad "gauge rate not the amplifier's" "600 / 2^k" run --gauge-rate-hz 500
+expect_bad "gauge noise negative" "--gauge-noise-n" run --gauge-noise-n -0.1
+expect_bad "gauge step zero" "--gauge-step-n" run --gauge-step-n 0
+"$hil" run --duration 0.5 --gauge-filter-hz 4 --gauge-rate-hz 150 --gauge-noise-n 0.03 --gauge-step-n 0.01 --json >"$work/g.json"
+check "the gauge options reach the model" jq -e '.parameters | .gauge_filter_hz == 4 and .gauge_rate_hz == 150 and
+  .gauge_noise_n == 0.03 and .gauge_step_n == 0.01' "$work/g.json"
 
 args=(run --scenario wall-tap --duration 2 --seed 7 --delay-ms 10 --jitter-ms 3 --loss 0.05 --fault link-down@1+0.2 --json)
 "$hil" "${args[@]}" >"$work/a.json"; check "run --json exits 0" test $? -eq 0
@@ -46,6 +54,25 @@ for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png di
   check "sweep wrote $f" test -s "$work/sweep/$f"
 done
 check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
+
+# sphere-3dof, the paper's 3-DoF experiment: its own report, trace and sweep.
+args=(run --scenario sphere-3dof --duration 2 --seed 3 --p-velocity 0 --p-force 0.05 --json)
+"$hil" "${args[@]}" >"$work/s1.json"; check "sphere-3dof run --json exits 0" test $? -eq 0
+"$hil" "${args[@]}" >"$work/s2.json"
+check "sphere-3dof: same seed, same JSON (but timings)" diff <(jq -cS "$strip" "$work/s1.json") <(jq -cS "$strip" "$work/s2.json")
+check "sphere-3dof: the report has its fields" jq -e '.scenario == "sphere-3dof" and has("velocity_packet_rate") and
+  has("force_packet_rate") and has("contact_share") and has("force_jnd_violation") and has("position_rmse_m") and
+  .parameters.force.p == 0.05' "$work/s1.json"
+"$hil" run --scenario sphere-3dof --duration 1 --trace "$work/sphere.csv" >/dev/null
+check "sphere-3dof trace has a header and one row per tick" test "$(wc -l <"$work/sphere.csv")" -eq 1001
+expect_bad "sphere-3dof has no lever faults" "no levers" run --scenario sphere-3dof --fault link-down@1
+expect_bad "serve has no sphere-3dof" "no levers" serve --scenario sphere-3dof --hsi-config /dev/null --top-config /dev/null
+"$hil" sweep --scenario sphere-3dof --out "$work/sphere-sweep" --seeds 1 --duration 0.2 >/dev/null 2>"$work/sweep.err"
+check "sphere-3dof sweep exits 0" test $? -eq 0
+for f in sweep.csv summary.csv paper_fig12.csv fig12_packet_rates.png distortion.png position_error.png; do
+  check "sphere-3dof sweep wrote $f" test -s "$work/sphere-sweep/$f"
+done
+check "sphere-3dof summary has 72 points" test "$(wc -l <"$work/sphere-sweep/summary.csv")" -eq 73
 
 # serve, on a machine without the levers' devices: bad configurations are bad input, missing devices a
 # runtime failure naming the device; the end-to-end runs are in tests/kernel/lever_*.sh.

@@ -2,6 +2,7 @@
 // TOP, the TOP meets the wall, and the wall's force comes back to the operator's hand.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <numbers>
 
 #include "lever_rig.hpp"
 
@@ -49,4 +50,48 @@ TEST_CASE("the TOP follows the HSI and the wall force comes back", "[firmware][c
   const double samples = 3500;  // 1500 free + 2000 pressing
   CHECK((rig.hsi.counters().data_sent - hsi_sent_before) / samples < 0.5);
   CHECK((rig.top.counters().data_sent - top_sent_before) / samples < 0.5);
+}
+
+// The paper's velocity (III-E): the quantized position's backward difference. Once the encoder stops counting
+// it is exactly zero, so the pure Weber rule (floor 0) sends nothing but refreshes; the smooth estimate still
+// decays toward zero after the last count, by more than p of itself, and keeps sending until it rounds to zero
+// on the wire.
+TEST_CASE("the HSI can send the backward difference: exactly zero at rest, so the paper's rule falls silent",
+          "[firmware][closed-loop]") {
+  auto deadband_frames_at_rest = [](fw::MotionVelocity velocity) {
+    auto hsi = lever::test::rig_config(protocol::Role::hsi);
+    hsi.motion_codec = {codec::Mode::deadband, 0.1, 0.0, 0.0};
+    hsi.motion_velocity = velocity;
+    PairRig rig(hsi);
+    rig.boot_and_arm();
+    rig.hand_target = 0.15;
+    const double rad_per_count = 2.0 * std::numbers::pi / hsi.counts_per_rev;
+    bool difference_exact = true;
+    for (int i = 0; i < 400; ++i) {
+      const auto before = rig.hsi_hal.encoder_.counts;
+      rig.tick();
+      const double expected = static_cast<double>(rig.hsi_hal.encoder_.counts - before) * rad_per_count / 1e-3;
+      difference_exact = difference_exact && std::fabs(rig.hsi.telemetry().velocity_difference_rad_s - expected) < 1e-9;
+    }
+    CHECK(difference_exact);
+    // Back to the middle of a count, until the counts have not changed for 200 ticks. Frames count from the
+    // second tick without a new count: the first still carries the step back to zero.
+    rig.hand_target = 100.5 * rad_per_count;
+    const auto& c = rig.hsi.counters();
+    std::uint32_t deadband_before = 0;
+    int unchanged = 0;
+    bool zero_at_rest = true;
+    for (int i = 0; i < 20000 && unchanged < 200; ++i) {
+      const auto before = rig.hsi_hal.encoder_.counts;
+      rig.tick();
+      unchanged = rig.hsi_hal.encoder_.counts == before ? unchanged + 1 : 0;
+      if (unchanged == 1) deadband_before = c.data_sent - c.refresh_sent;
+      if (unchanged >= 1) zero_at_rest = zero_at_rest && rig.hsi.telemetry().velocity_difference_rad_s == 0.0;
+    }
+    REQUIRE(unchanged == 200);
+    CHECK(zero_at_rest);
+    return c.data_sent - c.refresh_sent - deadband_before;
+  };
+  CHECK(deadband_frames_at_rest(fw::MotionVelocity::difference) == 0u);
+  CHECK(deadband_frames_at_rest(fw::MotionVelocity::estimate) > 0u);
 }

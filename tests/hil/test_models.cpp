@@ -1,4 +1,5 @@
-// The HIL's models on their own: bus timing and arbitration, the network link, encoder, gauge, operator.
+// The HIL's models on their own: bus timing and arbitration, the network link, encoder, operator (the gauge's
+// amplifier in test_strain_gauge_model.cpp).
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
@@ -8,7 +9,6 @@
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/network.hpp"
 #include "lever/hil/quadrature_encoder.hpp"
-#include "lever/hil/strain_gauge_model.hpp"
 #include "lever/hil/wall.hpp"
 
 using namespace lever;
@@ -76,9 +76,9 @@ TEST_CASE("the link delays, loses and reorders as configured, reproducibly", "[h
     NetworkLink link(p, seed);
     std::vector<std::uint32_t> arrived;
     for (int i = 0; i < 10000; ++i) link.send(frame(static_cast<std::uint32_t>(i % 0x7FF)), i * 100'000LL);
-    protocol::CanFrame f;
+    TimedFrame f;
     for (Nanos t = 0; t < 2'000'000'000LL; t += 100'000)
-      while (link.pop_arrived(t, f)) arrived.push_back(f.id);
+      while (link.pop_arrived(t, f)) arrived.push_back(f.frame.id);
     return std::make_pair(link.stats(), arrived);
   };
   const auto [lossy, lossy_ids] = run({5.0, 0.0, 0.1, true}, 1);
@@ -95,9 +95,10 @@ TEST_CASE("the link delays, loses and reorders as configured, reproducibly", "[h
 TEST_CASE("a datagram arrives after the configured delay", "[hil][network]") {
   NetworkLink link({20.0, 0.0, 0.0, true}, 1);
   link.send(frame(0x100), 1'000'000);
-  protocol::CanFrame f;
+  TimedFrame f;
   CHECK_FALSE(link.pop_arrived(20'999'999, f));
   CHECK(link.pop_arrived(21'000'000, f));
+  CHECK(f.time == 21'000'000);  // its arrival time, for the bridge's own timestamp
   link.set_down(true);
   link.send(frame(0x100), 30'000'000);
   CHECK_FALSE(link.pop_arrived(100'000'000, f));
@@ -165,35 +166,6 @@ TEST_CASE("edges beyond the queue's capacity are lost, counted and reported to t
   CHECK(d.count == 32u);
   CHECK(d.lost == 2607u - 32u);
   CHECK(encoder.drain_edges(edges, 64).lost == 0u);  // said once
-}
-
-TEST_CASE("the gauge samples at its own rate, with noise of the configured size", "[hil][gauge]") {
-  StrainGaugeParams p;
-  p.sample_rate_hz = 500.0;
-  p.noise_n = 0.02;
-  StrainGaugeModel gauge(p, 3);
-  int fresh = 0;
-  fw::Tick last = 0;
-  double sum = 0, sum_sq = 0;
-  for (fw::Tick now = 1; now <= 10000; ++now) {
-    gauge.update(2.0, now);
-    const auto r = gauge.latest();
-    REQUIRE(r);
-    if (r->tick != last) {
-      ++fresh;
-      last = r->tick;
-      const double f = r->raw * p.newton_per_count;
-      sum += f;
-      sum_sq += f * f;
-    }
-  }
-  CHECK(fresh == Approx(5000).margin(2));
-  const double mean = sum / fresh;
-  CHECK(mean == Approx(2.0).margin(0.002));
-  CHECK(std::sqrt(sum_sq / fresh - mean * mean) == Approx(0.02).epsilon(0.05));
-  gauge.set_saturated(true);
-  gauge.update(2.0, 10002);
-  CHECK(gauge.latest()->raw == 32767);
 }
 
 TEST_CASE("the wall pushes, never pulls", "[hil][wall]") {

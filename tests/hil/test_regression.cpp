@@ -23,9 +23,9 @@ TEST_CASE("the wall-tap table stays within the spread over seeds", "[hil][regres
       c.scenario = ScenarioKind::wall_tap;
       c.duration_s = 20.0;
       const auto mode = row.at("mode") == "predictive" ? codec::Mode::predictive : codec::Mode::deadband;
-      const double p = row.at("p"), filter = row.at("filter_hz");
-      c.velocity_codec = {mode, p, row.at("floor_velocity").get<double>(), filter};
-      c.force_codec = {mode, p, row.at("floor_force").get<double>(), filter};
+      const double p = row.at("p");
+      c.velocity_codec = {mode, p, row.at("floor_velocity").get<double>(), row.at("filter_hz_velocity").get<double>()};
+      c.force_codec = {mode, p, row.at("floor_force").get<double>(), row.at("filter_hz_force").get<double>()};
       double velocity = 0, force = 0, jnd = 0;
       constexpr int kSeeds = 3;
       for (int seed = 1; seed <= kSeeds; ++seed) {

@@ -113,6 +113,9 @@ ConfigSchema schema_for(FwConfig& config) {
   s.integer("link.refresh_ms", l.refresh_period, 1, 30000, "ms", "a data frame at least this often");
 
   bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
+  s.choice("codec.motion.velocity", l.motion_velocity,
+           {{"difference", fw::MotionVelocity::difference}, {"estimate", fw::MotionVelocity::estimate}},
+           "HSI sends the quantized position's backward difference (the paper's; 0 at rest) or the velocity estimate");
   bind_codec(s, "codec.force", l.force_codec, "N");
 
   s.number("encoder.counts_per_rev", l.counts_per_rev, 1.0, 1e8, "counts", "counts per turn (lines x4)");

@@ -17,6 +17,9 @@ class LowPassPrefilter {
   constexpr bool enabled() const noexcept { return cutoff_hz_ > T(0); }
   constexpr T cutoff_hz() const noexcept { return cutoff_hz_; }
 
+  // The last output, what the deadband decided on (zero before the first sample).
+  constexpr const Vec<T, N>& output() const noexcept { return y_; }
+
   // Forget the history: the next sample passes through unchanged (y_0 = x_0).
   constexpr void reset() noexcept { primed_ = false; }
 

@@ -38,6 +38,7 @@ class DeadbandSender {
 
   constexpr const Config<T>& config() const noexcept { return config_; }
   constexpr const ReferenceModel<T, N>& model() const noexcept { return model_; }
+  constexpr const LowPassPrefilter<T, N>& prefilter() const noexcept { return prefilter_; }
   constexpr const Q& quantizer() const noexcept { return quantizer_; }
 
   // New parameters from the next offer() on. The transmitted history stays, so a receiver that applies the

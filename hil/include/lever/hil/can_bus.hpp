@@ -93,6 +93,14 @@ class CanBus {
   // A node in bus-off neither sends nor receives; its queued frames are lost.
   void set_bus_off(Node n, bool off);
 
+  // No frame waits to be sent and none is on the wire: nothing will be delivered until a node sends.
+  bool idle() const {
+    if (free_at_ > now_) return false;
+    for (const auto& node : nodes_)
+      if (!node.tx.empty()) return false;
+    return true;
+  }
+
   Nanos now() const { return now_; }
   double load() const { return now_ > 0 ? static_cast<double>(busy_) / static_cast<double>(now_) : 0.0; }
   std::uint64_t frames() const { return frames_; }

@@ -19,7 +19,8 @@ struct OperatorParams {
   double force_bandwidth_hz = 1.5;  // how fast a person corrects a felt force error
 };
 
-enum class ScenarioKind : std::uint8_t { wall_tap, free_motion, press_hold };
+// sphere_3dof is the paper's 3-DoF experiment: no lever, no HumanOperator (lever/hil/sphere3dof.hpp).
+enum class ScenarioKind : std::uint8_t { wall_tap, free_motion, press_hold, sphere_3dof };
 
 // One piece of intent.
 struct Segment {

@@ -25,14 +25,15 @@ class NetworkLink {
   NetworkLink(const NetworkParams& p, std::uint64_t seed) : p_(p), rng_(seed) {}
 
   void send(const protocol::CanFrame& f, Nanos t);
-  // The next datagram that has arrived by t, in arrival order.
-  bool pop_arrived(Nanos t, protocol::CanFrame& f);
+  // The next datagram that has arrived by t, in arrival order, with its arrival time.
+  bool pop_arrived(Nanos t, TimedFrame& f);
 
   // Fault injection.
   void set_down(bool down) { down_ = down; }  // every datagram lost
   void set_extra_delay_ms(double ms) { extra_delay_ms_ = ms; }
   void set_burst_loss(double loss) { burst_loss_ = loss; }  // on top of the base loss
 
+  bool in_flight() const { return size_ > 0; }
   const Stats& stats() const { return stats_; }
 
  private:

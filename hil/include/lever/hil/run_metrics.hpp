@@ -21,11 +21,24 @@ class RunMetrics {
     sq_position_ += position_error_rad * position_error_rad;
     const double df = displayed_n - measured_n;
     sq_force_ += df * df;
-    if (std::fabs(df) > std::max(jnd_ * std::fabs(measured_n), jnd_absolute_n_)) ++violations_;
+    violations_ += violates(displayed_n, measured_n);
     if (contact_n > 0.0) {
       ++contact_ticks_;
       contact_force_sum_ += contact_n;
     }
+  }
+
+  // The displayed force's distortion by cause, for a run that can see inside the TOP's sender (not serve):
+  // against the measurement of `nominal delay` ticks earlier (the codec, the filter and the link's loss and
+  // jitter; the transport delay itself excluded), the codec alone (what a lossless receiver without delay would
+  // hold, against the prefiltered force the codec was given), and the prefilter alone (its output against its
+  // input).
+  void add_force_causes(double displayed_n, double measured_delayed_n, double lossless_n, double filtered_n,
+                        double measured_n) {
+    ++cause_ticks_;
+    violations_link_ += violates(displayed_n, measured_delayed_n);
+    violations_codec_ += violates(lossless_n, filtered_n);
+    violations_filter_ += violates(filtered_n, measured_n);
   }
 
   // Into the report's fields (SimResult or anything with the same names).
@@ -40,6 +53,10 @@ class RunMetrics {
     r.position_rmse_rad = std::sqrt(sq_position_ / n);
     r.force_rmse_n = std::sqrt(sq_force_ / n);
     r.force_jnd_violation = static_cast<double>(violations_) / n;
+    const double c = cause_ticks_ > 0 ? static_cast<double>(cause_ticks_) : 1.0;
+    r.force_jnd_violation_link = static_cast<double>(violations_link_) / c;
+    r.force_jnd_violation_codec = static_cast<double>(violations_codec_) / c;
+    r.force_jnd_violation_filter = static_cast<double>(violations_filter_) / c;
     r.contact_share = static_cast<double>(contact_ticks_) / n;
     r.mean_contact_force_n = contact_ticks_ > 0 ? contact_force_sum_ / static_cast<double>(contact_ticks_) : 0.0;
   }
@@ -50,7 +67,14 @@ class RunMetrics {
   std::uint64_t force_frames() const { return force_frames_; }
 
  private:
+  // Off by more than a just noticeable difference: Weber's fraction of the reference, never below the absolute
+  // detection threshold.
+  bool violates(double shown, double reference) const {
+    return std::fabs(shown - reference) > std::max(jnd_ * std::fabs(reference), jnd_absolute_n_);
+  }
+
   double jnd_, jnd_absolute_n_;
+  std::uint64_t cause_ticks_ = 0, violations_link_ = 0, violations_codec_ = 0, violations_filter_ = 0;
   std::uint64_t armed_ticks_ = 0, motion_frames_ = 0, force_frames_ = 0, violations_ = 0, contact_ticks_ = 0;
   double sq_position_ = 0, sq_force_ = 0, contact_force_sum_ = 0;
 };

@@ -38,12 +38,17 @@ struct SimView {
 
 struct TraceRow;
 
+// Where the levers are: both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
+// over an IP link (the network parameters apply only there).
+enum class Topology { one_site, two_sites };
+
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
   double duration_s = 20.0;  // the paper's interval length
   std::uint64_t seed = 1;
   codec::Config<double> velocity_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};  // HSI -> TOP
   codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.0, 0.0};     // TOP -> HSI
+  Topology topology = Topology::two_sites;
   NetworkParams network{};
   std::vector<FaultSpec> faults;
   double rearm_after_s = 0.3;  // the host re-arms (and if need be re-homes) levers this long after a fault's span ends
@@ -60,7 +65,7 @@ struct SimConfig {
   bool homing = true;
   int substeps = 10;  // physics steps per 1 ms tick
   double bitrate = 1e6;
-  double bridge_latency_us = 100.0;  // each bridge's receive-to-send time
+  double bridge_latency_us = 100.0;  // each bridge's receive-to-send time (at least 1 us)
   double jnd = 0.10;                 // force_jnd_violation: relative threshold (Weber fraction)...
   double jnd_absolute_n = 0.05;      // ...but never below the absolute detection threshold for force
   bool record_trace = false;
@@ -96,6 +101,11 @@ struct SimResult {
   double position_rmse_rad = 0.0;     // TOP angle against HSI angle
   double force_rmse_n = 0.0;          // displayed (HSI) against measured (TOP gauge)
   double force_jnd_violation = 0.0;   // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
+  // The same by cause (RunMetrics::add_force_causes): displayed against the measurement one nominal delay
+  // earlier; the codec alone; the prefilter alone.
+  double force_jnd_violation_link = 0.0, force_jnd_violation_codec = 0.0, force_jnd_violation_filter = 0.0;
+  int nominal_delay_ticks = 0;        // nominal_one_way_delay_ticks() of the run
+  double prefilter_delay_ms = 0.0;    // the force prefilter's group delay at low frequencies, 1 / (2 pi f_c)
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
   double bus_load_hsi = 0.0, bus_load_top = 0.0;
@@ -112,6 +122,11 @@ struct SimResult {
   std::vector<FaultReport> faults;
   std::vector<TraceRow> trace;
 };
+
+// The ticks from a TOP's measurement to the HSI's display of it when nothing waits: a data frame's worst-case
+// time on each bus, the bridges' latency and the network's configured delay (jitter not included), rounded up
+// to the next tick, at which the receiving lever uses it.
+int nominal_one_way_delay_ticks(const SimConfig& config);
 
 SimResult run_simulation(const SimConfig& config);
 

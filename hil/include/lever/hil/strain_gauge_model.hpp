@@ -1,8 +1,11 @@
 #pragma once
-// A strain gauge behind a weighing amplifier: gain and offset, white noise, an ADC of finite bits that
-// saturates, and a sample rate of its own (often below the firmware's 1 kHz).
+// A load cell behind a weighing amplifier, after the Flintec DAD 141.1 (docs/hil-model.md, "The strain-gauge
+// amplifier"): the bridge signal plus white noise converted at the ADC's rate, the amplifier's 2nd-order IIR
+// low-pass, the mean of 2^UR conversions as its output rate, quantization to the display step, saturation at
+// the configured maximum, and a clock of its own (600 conversions per second against the firmware's 1 kHz).
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <optional>
 
 #include "lever/common/rng.hpp"
@@ -11,37 +14,62 @@
 namespace lever::hil {
 
 struct StrainGaugeParams {
-  double newton_per_count = 100.0 / 65536.0;  // 16-bit over +-50 N: what the firmware's calibration expects
-  double offset_counts = 0.0;                 // the amplifier's zero error, removed by a tare
-  double gain_error = 0.0;                    // relative calibration error
-  double noise_n = 0.01;                      // N rms: 0.01 % of full scale, an ordinary amplifier
-  int adc_bits = 16;
-  double sample_rate_hz = 1000.0;
+  double adc_rate_hz = 600.0;      // conversions per second; the DAD's rate in its IIR mode
+  double filter_hz = 18.0;         // IIR -3 dB cut-off (FL 1, its fastest filter); 0: unfiltered
+  int averaging = 1;               // conversions averaged per reading (2^UR): output rate adc_rate_hz / averaging
+  double noise_n = 0.0168;         // N rms per conversion, white, before the filter: the approval's 10 000 d at FL 7
+  double step_n = 50.0 / 20000.0;  // N per display step: factory 20 000 d at 2 mV/V, a 50 N, 2 mV/V cell
+  double range_n = 50.0;           // maximum output (CM, CI): the cell's capacity; beyond it reads saturated
+  double offset_counts = 0.0;      // the amplifier's zero error, removed by a tare
+  double gain_error = 0.0;         // relative calibration error
+
+  double output_rate_hz() const { return adc_rate_hz / averaging; }
+  double max_code() const { return std::round(range_n / step_n); }
+  // The pole of each of the filter's two equal real sections: -3 dB at filter_hz overall.
+  double pole_hz() const { return filter_hz / std::sqrt(std::sqrt(2.0) - 1.0); }
+  // Finite, positive where it must be, the filter below the conversions' Nyquist frequency.
+  bool valid() const {
+    return std::isfinite(adc_rate_hz) && adc_rate_hz > 0.0 && std::isfinite(filter_hz) && filter_hz >= 0.0 &&
+           filter_hz < adc_rate_hz / 2 && averaging >= 1 && std::isfinite(noise_n) && noise_n >= 0.0 &&
+           std::isfinite(step_n) && step_n > 0.0 && std::isfinite(range_n) && range_n >= step_n;
+  }
 };
+
+// The firmware's calibration for this amplifier, as a board's lever-fw configuration is set for its own: codes to
+// newtons, the codes at which it reads saturated, and a staleness window of at least two output periods.
+inline void calibrate_for(fw::StrainGauge::Config& c, const StrainGaugeParams& p) {
+  c.newton_per_count = p.step_n;
+  c.raw_max = p.max_code();
+  c.raw_min = -p.max_code();
+  const auto two_periods = static_cast<fw::Tick>(std::ceil(2000.0 / p.output_rate_hz()));
+  if (c.stale_after < two_periods) c.stale_after = two_periods;
+}
 
 class StrainGaugeModel {
  public:
-  StrainGaugeModel(const StrainGaugeParams& p, std::uint64_t seed) : p_(p), rng_(seed) {}
+  StrainGaugeModel(const StrainGaugeParams& p, std::uint64_t seed) : p_(p), rng_(seed), period_s_(1.0 / p.adc_rate_hz) {
+    if (p.filter_hz > 0.0) {
+      const double h_over_tau = 2.0 * std::numbers::pi * p.pole_hz() * period_s_;
+      decay_ = std::exp(-h_over_tau);
+      coupling_ = h_over_tau * decay_;
+    }
+  }
 
-  // Called once per firmware tick with the true force; takes a new sample when the amplifier's clock says so.
+  // Called once per firmware tick with the true force; converts every sample the amplifier's clock has due
+  // since the last call, and publishes a reading each time `averaging` conversions are in.
   void update(double true_force, fw::Tick now) {
     const double now_s = static_cast<double>(now) * 1e-3;
-    if (frozen_ || now_s + 1e-12 < next_sample_s_) return;
-    next_sample_s_ += 1.0 / p_.sample_rate_hz;
-    if (next_sample_s_ < now_s) next_sample_s_ = now_s + 1.0 / p_.sample_rate_hz;
-    const double max_code = std::ldexp(1.0, p_.adc_bits - 1) - 1.0;
-    double code = true_force * (1.0 + p_.gain_error) / p_.newton_per_count + p_.offset_counts +
-                  p_.noise_n / p_.newton_per_count * rng_.normal();
-    code = std::round(code);
-    if (force_saturated_) code = max_code;
-    code = code > max_code ? max_code : code < -max_code - 1.0 ? -max_code - 1.0 : code;
-    reading_ = fw::ForceReading{code, now - clock_offset_, false};
+    if (next_sample_s_ + 1.0 < now_s) next_sample_s_ = now_s;  // first called late: no burst of old samples
+    while (next_sample_s_ <= now_s + 1e-12) {
+      next_sample_s_ += period_s_;
+      convert(true_force, now);
+    }
   }
 
   // Readings are stamped on the firmware's clock, which starts again at a reboot: tick - offset.
   void set_clock_offset(fw::Tick offset) { clock_offset_ = offset; }
 
-  // Fault injection: the amplifier stops answering (readings age), or reads at its limit.
+  // Fault injection: the amplifier stops answering (readings age; it goes on converting), or reads at its limit.
   void set_frozen(bool frozen) { frozen_ = frozen; }
   void set_saturated(bool saturated) { force_saturated_ = saturated; }
 
@@ -49,9 +77,39 @@ class StrainGaugeModel {
   std::optional<fw::ForceReading> latest() const { return reading_; }
 
  private:
+  void convert(double true_force, fw::Tick now) {
+    const double signal = true_force * (1.0 + p_.gain_error);
+    const double x = signal + (p_.noise_n > 0.0 ? p_.noise_n * rng_.normal() : 0.0);
+    if (!started_) {  // the amplifier has been on long before the simulation starts: settled on the signal
+      stage1_ = stage2_ = signal;
+      started_ = true;
+    }
+    // The two poles, exact for an input held over the conversion period (step invariant), so the response at
+    // the conversions is the continuous filter's.
+    stage2_ = decay_ * stage2_ + coupling_ * stage1_ + (1.0 - decay_ - coupling_) * x;
+    stage1_ = decay_ * stage1_ + (1.0 - decay_) * x;
+    sum_ += stage2_;
+    if (++count_ < p_.averaging) return;
+    const double mean = sum_ / count_;
+    sum_ = 0.0;
+    count_ = 0;
+    const double max_code = p_.max_code();
+    double code = std::round(mean / p_.step_n + p_.offset_counts);
+    if (force_saturated_) code = max_code;
+    code = code > max_code ? max_code : code < -max_code ? -max_code : code;
+    if (!frozen_) reading_ = fw::ForceReading{code, now - clock_offset_, false};
+  }
+
   StrainGaugeParams p_;
   Rng rng_;
+  double decay_ = 0.0;     // exp(-h / tau) per conversion; 0 with the filter off passes the input through
+  double coupling_ = 0.0;  // (h / tau) exp(-h / tau): the first pole's share in the second over a period
+  double period_s_;        // between conversions
   double next_sample_s_ = 0.0;
+  double stage1_ = 0.0, stage2_ = 0.0;
+  bool started_ = false;
+  double sum_ = 0.0;
+  int count_ = 0;
   fw::Tick clock_offset_ = 0;
   bool frozen_ = false;
   bool force_saturated_ = false;

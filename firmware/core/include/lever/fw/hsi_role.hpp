@@ -28,7 +28,8 @@ class HsiRole {
       : display_(c.display),
         sender_(c.motion_codec, velocity_wire(), c.refresh_period),
         receiver_(force_wire()),
-        stale_after_(2 * c.refresh_period) {}
+        stale_after_(2 * c.refresh_period),
+        motion_velocity_(c.motion_velocity) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_hsi; }
   static constexpr bool uses_gauge(const LeverConfig& c) noexcept {
@@ -64,7 +65,9 @@ class HsiRole {
   }
 
   std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
-    const auto out = sender_.offer(now, t.velocity_rad_s);
+    const double velocity =
+        motion_velocity_ == MotionVelocity::difference ? t.velocity_difference_rad_s : t.velocity_rad_s;
+    const auto out = sender_.offer(now, velocity);
     if (!out.send) return std::nullopt;
     bool position_saturated = false;
     protocol::MotionMessage m;
@@ -83,7 +86,9 @@ class HsiRole {
   ForceDisplay display_;
   Sender sender_;
   Receiver receiver_;
-  Tick stale_after_;  // two refresh periods without data: the sender stopped, not merely stayed inside its deadband
+  Tick stale_after_;
+  MotionVelocity
+      motion_velocity_;  // two refresh periods without data: the sender stopped, not merely stayed inside its deadband
 };
 
 }  // namespace lever::fw

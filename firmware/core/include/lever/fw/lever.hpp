@@ -150,7 +150,12 @@ class Lever {
     if (decoder_.fault()) position_.invalidate();  // until homed again (or, absolute, until the fault clears)
     telemetry_.position_rad = position_.position();
     telemetry_.position_valid = position_.valid();
-    if (dt > 0.0) telemetry_.velocity_rad_s = velocity_.update(position_.raw_angle(), dt);
+    const double raw_angle = position_.raw_angle();
+    if (dt > 0.0) {
+      telemetry_.velocity_rad_s = velocity_.update(raw_angle, dt);
+      telemetry_.velocity_difference_rad_s = (raw_angle - previous_raw_angle_) / dt;
+    }
+    previous_raw_angle_ = raw_angle;
     if (uses_gauge_) telemetry_.force_n = gauge_.update(hal_.force().latest(), now);
   }
 
@@ -376,6 +381,7 @@ class Lever {
   LeverTelemetry telemetry_;
   LeverCounters counters_;
   std::optional<double> index_raw_angle_;
+  double previous_raw_angle_ = 0.0;  // for the backward difference
   Tick next_heartbeat_ = 0;
   Tick saturated_ticks_ = 0;
   double hold_position_ = 0.0;

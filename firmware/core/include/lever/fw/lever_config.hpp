@@ -16,6 +16,13 @@
 
 namespace lever::fw {
 
+// The velocity the HSI transmits. The paper (III-E) sends "a discrete time difference approximation of the
+// measured quantized position": exactly zero at rest, so at rest its deadband sends nothing. The tracking
+// estimate is smoother but never exactly zero. The HSI's own damping uses the estimate either way. A board
+// sends the estimate by default: the difference's one-count steps (0.38 rad/s at 16384 counts per turn) reach
+// the TOP's damping term and make a stiff contact bounce harder (the HIL's paper scenarios use the difference).
+enum class MotionVelocity : std::uint8_t { difference, estimate };
+
 struct LeverConfig {
   protocol::Role role = protocol::Role::hsi;
   std::uint8_t pair = 0;  // 0..15, selects the CAN ids
@@ -32,6 +39,7 @@ struct LeverConfig {
   // sends nearly every sample at rest (measured: 82 % velocity frames in the closed-loop test).
   codec::Config<double> motion_codec{codec::Mode::deadband, 0.1, 0.02, 0.0};  // HSI velocity, rad/s
   codec::Config<double> force_codec{codec::Mode::deadband, 0.1, 0.05, 0.0};   // TOP contact force, N
+  MotionVelocity motion_velocity = MotionVelocity::estimate;
 
   // Sensors.
   double counts_per_rev = 16384.0;  // 4096 lines read x4

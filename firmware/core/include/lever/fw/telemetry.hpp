@@ -19,10 +19,11 @@ struct LeverCounters {
 struct LeverTelemetry {
   double position_rad = 0.0;  // lever coordinates; meaningful only while position_valid
   bool position_valid = false;
-  double velocity_rad_s = 0.0;
-  std::optional<double> force_n;  // own strain gauge, calibrated; empty when stale
-  std::optional<double> remote;   // reconstructed peer value: HSI velocity at the TOP, force at the HSI
-  double position_ref_rad = 0.0;  // TOP tracking reference
+  double velocity_rad_s = 0.0;             // the tracking estimate: smooth, for damping and control
+  double velocity_difference_rad_s = 0.0;  // the quantized position's backward difference: exactly 0 at rest
+  std::optional<double> force_n;           // own strain gauge, calibrated; empty when stale
+  std::optional<double> remote;            // reconstructed peer value: HSI velocity at the TOP, force at the HSI
+  double position_ref_rad = 0.0;           // TOP tracking reference
   double velocity_ref_rad_s = 0.0;
   double torque_demand_nm = 0.0;  // before the limit
   double torque_nm = 0.0;         // commanded

@@ -1,0 +1,306 @@
+#include "sphere.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iterator>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "lever/program/exit_codes.hpp"
+#include "lever/program/output_file.hpp"
+#include "lever/program/text.hpp"
+#include "sweep.hpp"
+
+namespace lever::hil {
+namespace {
+
+const char* mode_name(codec::Mode m) { return m == codec::Mode::predictive ? "predictive" : "deadband"; }
+
+nlohmann::json codec_json(const codec::Config<double>& c) {
+  return {{"mode", mode_name(c.mode)}, {"p", c.p}, {"floor", c.floor}, {"filter_hz", c.filter_hz}};
+}
+
+// The paper's deadband values in IV-B-3.
+constexpr double kPValues[] = {0.0, 0.025, 0.05, 0.075, 0.10, 0.125, 0.15, 0.20, 0.25, 0.30, 0.35, 0.40};
+
+struct Variant {
+  const char* name;
+  codec::Mode mode;
+  bool filter;
+};
+constexpr Variant kVariants[] = {
+    {"3-DoF", codec::Mode::deadband, false},
+    {"3-DoF LP", codec::Mode::predictive, false},
+    {"3-DoF LP+filter", codec::Mode::predictive, true},
+};
+constexpr SphereDirection kDirections[] = {SphereDirection::velocity, SphereDirection::force};
+const char* direction_name(SphereDirection d) { return d == SphereDirection::velocity ? "velocity" : "force"; }
+
+struct Job {
+  const Variant* variant;
+  SphereDirection direction;
+  double p;
+  std::uint64_t seed;
+  SphereResult result;
+};
+
+// The paper's Fig. 12 points, read off its text (docs/hil-model.md gives the sentence for each).
+constexpr char kPaperPoints[] =
+    "direction,variant,p_percent,rate_percent,source\n"
+    "force,3-DoF,0,87,contact about 87 % of the time at 0 % deadband\n"
+    "velocity,3-DoF,20,25,reduced by almost 75 % at 20 %\n"
+    "force,3-DoF,5,10,reduction by almost 90 % at 5 %\n"
+    "velocity,3-DoF LP,20,17,total savings 83 %\n"
+    "force,3-DoF LP,5,7,total savings 93 %\n"
+    "force,3-DoF LP,2.5,16,derived: LP+filter improves on it by 55 % and reaches 7 %\n"
+    "force,3-DoF LP+filter,2.5,7.4,7.4 % for force at 2.5 %\n"
+    "velocity,3-DoF LP+filter,7.5,8.7,8.7 % for velocity at 7.5 %\n";
+
+std::string gnuplot_script() {
+  return fmt::format(R"gp({0}set terminal pngcairo size 1200,520 font ",11"
+set datafile separator ","
+set grid
+set key top right
+set xlabel "deadband parameter p [%]"
+set xrange [0:40]
+file = dir . "summary.csv"
+paper = dir . "paper_fig12.csv"
+v(i) = i == 1 ? "3-DoF" : i == 2 ? "3-DoF LP" : "3-DoF LP+filter"
+set output dir . "fig12_packet_rates.png"
+set multiplot layout 1,2 title "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text)"
+set ylabel "packet rate [% of 1 kHz]"
+set yrange [0:100]
+set title "velocity OP -> TOP (deadband on velocity)"
+plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $4 : 1/0) with linespoints lc i dt i title v(i), \
+     for [i=1:3] paper using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $4 : 1/0) with points pt 7 ps 1.6 lc i title "paper ".v(i)
+set title "force TOP -> OP (deadband on force)"
+plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $5 : 1/0) with linespoints lc i dt i title v(i), \
+     for [i=1:3] paper using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $4 : 1/0) with points pt 7 ps 1.6 lc i title "paper ".v(i)
+unset multiplot
+set output dir . "distortion.png"
+set multiplot layout 1,2 title "sphere-3dof: displayed force off the undistorted system's by more than a JND"
+set ylabel "share of time [%]"
+set yrange [0:*]
+set title "deadband on velocity"
+plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $6 : 1/0) with linespoints lc i dt i title v(i)
+set title "deadband on force"
+plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $6 : 1/0) with linespoints lc i dt i title v(i)
+unset multiplot
+set terminal pngcairo size 900,600 font ",11"
+set output dir . "position_error.png"
+set title "sphere-3dof: TOP position error, deadband on velocity"
+set ylabel "position RMSE [um]"
+plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $9 : 1/0) with linespoints lc i dt i title v(i)
+)gp",
+                     kGnuplotScriptDir);
+}
+
+std::string trace_csv(const SphereResult& r) {
+  fmt::memory_buffer out;
+  fmt::format_to(std::back_inserter(out),
+                 "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
+                 "top_x,top_y,top_z,env_force_x,env_force_y,env_force_z,force_sent,displayed_x,displayed_y,"
+                 "displayed_z,reference_x,reference_y,reference_z\n");
+  auto vec = [&](const Vec3& v) { fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", v[0], v[1], v[2]); };
+  for (const auto& row : r.trace) {
+    fmt::format_to(std::back_inserter(out), "{:.3f}", row.t);
+    vec(row.position);
+    vec(row.measured);
+    vec(row.velocity);
+    fmt::format_to(std::back_inserter(out), ",{:d}", row.velocity_sent ? 1 : 0);
+    vec(row.top_position);
+    vec(row.environment_force);
+    fmt::format_to(std::back_inserter(out), ",{:d}", row.force_sent ? 1 : 0);
+    vec(row.displayed_force);
+    vec(row.reference_force);
+    out.push_back('\n');
+  }
+  return fmt::to_string(out);
+}
+
+}  // namespace
+
+SphereConfig sphere_config_from(const SimConfig& run) {
+  if (!run.faults.empty())
+    throw std::invalid_argument("sphere-3dof has no levers: --fault applies to the lever scenarios only");
+  if (run.topology == Topology::one_site)
+    throw std::invalid_argument("sphere-3dof has no CAN sites: its two PCs talk over a LAN (--delay-ms, --jitter-ms)");
+  SphereConfig c;
+  c.duration_s = run.duration_s;
+  c.seed = run.seed;
+  c.velocity_codec = run.velocity_codec;
+  c.force_codec = run.force_codec;
+  c.network.delay_ms = run.network.delay_ms;
+  c.network.jitter_ms = run.network.jitter_ms;
+  c.network.loss = run.network.loss;
+  c.record_trace = run.record_trace;
+  return c;
+}
+
+nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) {
+  return {
+      {"scenario", "sphere-3dof"},
+      {"duration_s", c.duration_s},
+      {"seed", c.seed},
+      {"velocity_packet_rate", r.velocity_packet_rate},
+      {"force_packet_rate", r.force_packet_rate},
+      {"contact_share", r.contact_share},
+      {"mean_contact_force_n", r.mean_contact_force_n},
+      {"saturated_share", r.saturated_share},
+      {"force_jnd_violation", r.force_jnd_violation},
+      {"downlink_jnd_violation", r.downlink_jnd_violation},
+      {"force_rmse", r.force_rmse_n},
+      {"position_rmse_m", r.position_rmse_m},
+      {"position_max_error_m", r.position_max_error_m},
+      {"zero_velocity_share", r.zero_velocity_share},
+      {"mean_speed_mps", r.mean_speed_mps},
+      {"packets", {{"velocity", r.velocity_packets}, {"force", r.force_packets}, {"stale", r.stale_packets}}},
+      {"nominal_delay_ticks", {{"op_to_top", r.uplink_delay_ticks}, {"top_to_op", r.downlink_delay_ticks}}},
+      {"parameters",
+       {{"velocity", codec_json(c.velocity_codec)},
+        {"force", codec_json(c.force_codec)},
+        {"delay_ms", c.network.delay_ms},
+        {"jitter_ms", c.network.jitter_ms},
+        {"loss", c.network.loss},
+        {"jnd", c.jnd},
+        {"jnd_absolute_n", c.jnd_absolute_n},
+        {"substeps", c.substeps},
+        {"device",
+         {{"resolution_m", c.device.resolution_m},
+          {"max_force_n", c.device.max_force_n},
+          {"mass_kg", c.device.mass_kg},
+          {"friction_n", c.device.friction_n}}},
+        {"hand",
+         {{"mass_kg", c.hand.mass_kg},
+          {"stiffness", c.hand.stiffness},
+          {"damping", c.hand.damping},
+          {"tremor_rms_m", c.hand.tremor_rms_m},
+          {"tremor_band_hz", {c.hand.tremor_low_hz, c.hand.tremor_high_hz}}}},
+        {"sphere", {{"radius_m", c.sphere.radius_m}, {"stiffness", c.sphere.stiffness}}}}},
+      {"realtime_factor", r.realtime_factor},
+      {"wall_time_s", r.wall_time_s},
+  };
+}
+
+int run_sphere_command(const SphereConfig& config, bool json, const std::string& trace_path) {
+  SphereConfig c = config;
+  c.record_trace = !trace_path.empty();
+  std::optional<program::OutputFile> trace;  // checked before the run
+  if (!trace_path.empty()) trace.emplace(trace_path, "--trace");
+  const SphereResult r = run_sphere(c);
+  if (trace) {
+    trace->write(trace_csv(r));
+    trace->commit();
+  }
+  std::FILE* out = trace && trace->is_stdout() ? stderr : stdout;  // the trace has stdout
+  if (json) {
+    fmt::print(out, "{}\n", sphere_report_json(c, r).dump());
+    return 0;
+  }
+  fmt::print(out, "sphere-3dof for {} s (seed {}), velocity {} p={} filter={} Hz, force {} p={} filter={} Hz\n",
+             c.duration_s, c.seed, mode_name(c.velocity_codec.mode), c.velocity_codec.p, c.velocity_codec.filter_hz,
+             mode_name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
+  fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
+             100 * r.force_packet_rate);
+  fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average (above the device's peak {:.1f} %)\n",
+             100 * r.contact_share, r.mean_contact_force_n, 100 * r.saturated_share);
+  fmt::print(
+      out,
+      "  force off the undistorted system's by more than a JND {:.1f} % of the time (off the TOP's own {:.1f} %), rmse "
+      "{:.3f} N; TOP position rmse {:.0f} um, max {:.0f} um\n",
+      100 * r.force_jnd_violation, 100 * r.downlink_jnd_violation, r.force_rmse_n, 1e6 * r.position_rmse_m,
+      1e6 * r.position_max_error_m);
+  fmt::print(out, "  velocity exactly zero in {:.0f} % of samples; mean speed {:.0f} mm/s; {:.0f}x real time\n",
+             100 * r.zero_velocity_share, 1000 * r.mean_speed_mps, r.realtime_factor);
+  return 0;
+}
+
+int run_sphere_sweep(const SweepOptions& o) {
+  namespace fs = std::filesystem;
+  const fs::path dir(o.out_dir);
+  prepare_sweep_dir(o.out_dir, {"sweep.csv", "summary.csv", "paper_fig12.csv", "plots.gp"});
+
+  std::vector<Job> jobs;
+  for (const auto direction : kDirections)
+    for (const auto& v : kVariants)
+      for (const double p : kPValues)
+        for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, direction, p, static_cast<std::uint64_t>(s), {}});
+
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex print;
+  const bool tty = isatty(fileno(stderr));
+  auto worker = [&] {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      Job& job = jobs[i];
+      SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
+      c.duration_s = o.duration_s;
+      c.seed = job.seed;
+      job.result = run_sphere(c);
+      const std::size_t finished = ++done;
+      std::lock_guard lock(print);
+      if (tty || finished == jobs.size() || finished % 50 == 0)
+        fmt::print(stderr, "{}sweep: {}/{} runs ({} {} p={:.1f} % seed {}){}", tty ? "\r" : "", finished, jobs.size(),
+                   direction_name(job.direction), job.variant->name, 100 * job.p, job.seed, tty ? "   " : "\n");
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < o.jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (tty) fmt::print(stderr, "\n");
+
+  std::string runs =
+      "direction,variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,downlink_jnd_violation,"
+      "contact_share,"
+      "position_rmse_m,force_rmse_n,realtime_factor\n";
+  std::string summary =
+      "direction,variant,p_percent,velocity_rate_percent,force_rate_percent,jnd_violation_percent,"
+      "downlink_jnd_violation_percent,contact_percent,position_rmse_um,force_rmse_n\n";
+  for (std::size_t i = 0; i < jobs.size(); i += static_cast<std::size_t>(o.seeds)) {
+    double v = 0, f = 0, jnd = 0, down = 0, contact = 0, pos = 0, frms = 0;
+    for (int s = 0; s < o.seeds; ++s) {
+      const Job& job = jobs[i + static_cast<std::size_t>(s)];
+      const SphereResult& r = job.result;
+      runs += fmt::format("{},{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6g},{:.6g},{:.0f}\n",
+                          direction_name(job.direction), job.variant->name, job.p, job.seed, r.velocity_packet_rate,
+                          r.force_packet_rate, r.force_jnd_violation, r.downlink_jnd_violation, r.contact_share,
+                          r.position_rmse_m, r.force_rmse_n, r.realtime_factor);
+      v += r.velocity_packet_rate;
+      f += r.force_packet_rate;
+      jnd += r.force_jnd_violation;
+      down += r.downlink_jnd_violation;
+      contact += r.contact_share;
+      pos += r.position_rmse_m;
+      frms += r.force_rmse_n;
+    }
+    const double n = o.seeds;
+    summary += fmt::format("{},{},{},{:.2f},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.4f}\n",
+                           direction_name(jobs[i].direction), jobs[i].variant->name, 100 * jobs[i].p, 100 * v / n,
+                           100 * f / n, 100 * jnd / n, 100 * down / n, 100 * contact / n, 1e6 * pos / n, frms / n);
+  }
+  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
+  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
+  program::OutputFile::write_all((dir / "paper_fig12.csv").string(), kPaperPoints, "--out");
+  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(), "--out");
+
+  if (const int status = run_gnuplot(dir / "plots.gp"); status != 0) {
+    fmt::print(stderr, "lever-hil: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
+               status == 127 ? "could not be started" : fmt::format("failed (exit status {})", status),
+               program::printable(dir.string()));
+    return program::kRuntimeFailure;
+  }
+  fmt::print(
+      "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, paper_fig12.csv, "
+      "fig12_packet_rates.png, distortion.png, position_error.png\n",
+      jobs.size(), o.duration_s, o.seeds, dir.string());
+  return 0;
+}
+
+}  // namespace lever::hil

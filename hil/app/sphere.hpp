@@ -1,0 +1,24 @@
+#pragma once
+// lever-hil's sphere-3dof scenario (the paper's 3-DoF experiment): run one, and sweep p for the Fig. 12-like
+// plots. Kept apart from the lever scenarios' run and sweep, which drive the firmware.
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "lever/hil/simulation.hpp"
+#include "lever/hil/sphere3dof.hpp"
+#include "sweep.hpp"
+
+namespace lever::hil {
+
+// `lever-hil run`'s options as the sphere takes them: duration, seed, both codecs, the link. Lever-only options
+// that were given (faults) are refused.
+SphereConfig sphere_config_from(const SimConfig& run);
+
+nlohmann::json sphere_report_json(const SphereConfig& config, const SphereResult& result);
+
+// Prints the report (human or JSON) and writes the trace CSV when a path is given.
+int run_sphere_command(const SphereConfig& config, bool json, const std::string& trace_path);
+
+int run_sphere_sweep(const SweepOptions& options);
+
+}  // namespace lever::hil

@@ -1,0 +1,121 @@
+#pragma once
+// The paper's 3-DoF experiment (section IV-B): an Omni-like 3-DoF haptic device in an operator's hand sends
+// position and velocity over a LAN to a virtual environment holding one sphere, which sends the force of
+// eq. (11) back. No lever and no firmware: the codec (lever::codec, N = 3) is driven directly, as the paper's
+// PCs did. Deterministic: the same configuration and seed give the same run, bit for bit.
+// docs/hil-model.md ("sphere-3dof") gives every parameter's reason.
+#include <cstdint>
+#include <vector>
+
+#include "lever/codec/config.hpp"
+#include "lever/common/vec.hpp"
+#include "lever/hil/network.hpp"
+
+namespace lever::hil {
+
+using Vec3 = Vec<double, 3>;
+
+// The SensAble PHANTOM Omni as its data sheet gives it.
+struct OmniParams {
+  double resolution_m = 55e-6;         // nominal position resolution (> 450 dpi)
+  double max_force_n = 3.3;            // maximum exertable force: the displayed vector's magnitude saturates here
+  double mass_kg = 0.045;              // apparent mass at the tip
+  double friction_n = 0.26;            // backdrive friction (the data sheet's bound)
+  double friction_linear_mps = 0.002;  // below this speed friction grows linearly: no chatter at the step
+};
+
+// The operator's hand and arm on the stylus, and what the person does with them.
+struct HandParams {
+  double mass_kg = 0.3;         // hand and forearm, as the 1-DoF operator (docs/hil-model.md)
+  double stiffness = 300.0;     // N/m: a relaxed grip
+  double damping = 20.0;        // N s/m: near critical with the hand's and the device's mass
+  double tremor_rms_m = 50e-6;  // physiological tremor, 3-D rms displacement of the free hand
+  double tremor_low_hz = 8.0, tremor_high_hz = 12.0;
+  int tremor_components = 6;  // sinusoids per axis, frequencies drawn in the band
+  bool explore = true;        // false: the hand holds still where it starts (tests)
+  // Exploring: strokes over the sphere at a light force, presses, lifting off and coming down elsewhere.
+  double stroke_force_min_n = 0.5, stroke_force_max_n = 1.5;
+  double press_force_min_n = 1.5, press_force_max_n = 3.0;
+  double stroke_speed_min_mps = 0.02, stroke_speed_max_mps = 0.08;
+  double lift_min_m = 0.005, lift_max_m = 0.015;
+  double cap_half_angle_rad = 1.0471975511965976;  // 60 degrees around +z, the side facing the user
+};
+
+// The virtual environment's only object.
+struct SphereParams {
+  Vec3 centre{};              // m: the middle of the workspace
+  double radius_m = 0.025;    // fits the Omni's 70 mm workspace depth with room around it
+  double stiffness = 1000.0;  // N/m, u of eq. (11): about the Omni's stiffest axis-wise bound (Z, 1.02 N/mm)
+};
+
+struct SphereConfig {
+  double duration_s = 30.0;  // the paper's interval length in IV-B
+  std::uint64_t seed = 1;
+  codec::Config<double> velocity_codec{codec::Mode::deadband, 0.0, 0.0, 0.0};  // OP -> TOP
+  codec::Config<double> force_codec{codec::Mode::deadband, 0.0, 0.0, 0.0};     // TOP -> OP
+  // A switched 100 Mbit/s Ethernet LAN; it never reorders (reorder is ignored: the LAN is FIFO).
+  NetworkParams network{0.2, 0.1, 0.0, false};
+  OmniParams device{};
+  HandParams hand{};
+  SphereParams sphere{};
+  double jnd = 0.1;              // Weber fraction of the distortion metric
+  double jnd_absolute_n = 0.05;  // its absolute floor, as the 1-DoF metric
+  int substeps = 10;             // physics steps per 1 ms tick
+  bool record_trace = false;
+};
+
+// The paper's variants: a deadband on one direction at a time, the other sending every change (p = 0, which
+// the receiver reconstructs exactly as if every sample had been sent).
+enum class SphereDirection : std::uint8_t { velocity, force };
+// Prefilter cut-offs of the "+ filter" variants, per direction (docs/hil-model.md says why).
+inline constexpr double kSphereVelocityFilterHz = 10.0;
+inline constexpr double kSphereForceFilterHz = 30.0;
+SphereConfig sphere_variant(SphereDirection direction, codec::Mode mode, bool filter, double p);
+
+struct SphereTraceRow {
+  double t = 0.0;
+  Vec3 position{};  // the device's tip (true)
+  Vec3 measured{};  // quantized to the device's resolution
+  Vec3 velocity{};  // backward difference of measured, the value offered to the codec
+  bool velocity_sent = false;
+  bool top_has_position = false;
+  Vec3 top_position{};       // the TOP's extrapolated user position
+  Vec3 environment_force{};  // eq. (11) at top_position
+  bool force_sent = false;
+  Vec3 displayed_force{};  // what the device displays (reconstructed, saturated)
+  Vec3 reference_force{};  // the force the undistorted system (p = 0, lossless) would display now
+};
+
+struct SphereResult {
+  std::uint64_t ticks = 0;
+  std::uint64_t velocity_packets = 0, force_packets = 0;
+  double velocity_packet_rate = 0.0;  // packets per 1 kHz sample
+  double force_packet_rate = 0.0;
+  double contact_share = 0.0;  // share of ticks with a non-zero environment force
+  double mean_contact_force_n = 0.0;
+  double saturated_share = 0.0;  // share of ticks the environment asked for more than the device's peak
+  // Share of ticks with |displayed - reference| > max(jnd |reference|, floor). The reference is the undistorted
+  // system's force: eq. (11) at the measured position the link's round trip earlier (both directions' codecs).
+  double force_jnd_violation = 0.0;
+  double force_rmse_n = 0.0;  // displayed against that reference
+  // The same against the force the TOP computed, the downlink's delay earlier: the force direction's codec alone.
+  double downlink_jnd_violation = 0.0;
+  double position_rmse_m = 0.0;  // the TOP's position against the measured one, the link's delay earlier
+  double position_max_error_m = 0.0;
+  double zero_velocity_share = 0.0;  // samples whose differenced velocity is exactly zero
+  double mean_speed_mps = 0.0;       // the device's true speed
+  int uplink_delay_ticks = 0;        // the link's nominal delay, OP -> TOP and TOP -> OP, in ticks
+  int downlink_delay_ticks = 0;
+  std::uint64_t stale_packets = 0;  // arrived after a newer one (dropped)
+  double realtime_factor = 0.0;
+  double wall_time_s = 0.0;
+  std::vector<SphereTraceRow> trace;
+};
+
+// Eq. (11): zero outside the sphere (and at its centre), else u (r - |x - s|) along (x - s)/|x - s|.
+Vec3 sphere_force(const SphereParams& sphere, const Vec3& x);
+
+// Throws std::invalid_argument on an invalid configuration.
+SphereResult run_sphere(const SphereConfig& config);
+
+}  // namespace lever::hil

@@ -1,0 +1,243 @@
+// sphere-3dof, the paper's 3-DoF experiment (IV-B): the environment's force is eq. (11), the device's
+// velocity is the backward difference of its quantized position, runs repeat per seed, the metric sees no
+// distortion where the codec makes none, fewer packets for a wider deadband, and the documented table stays
+// within its spread over seeds (tests/hil/sphere_3dof_bounds.json, written by scripts/hil-regression-bounds-sphere).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "lever/hil/sphere3dof.hpp"
+
+using namespace lever;
+using namespace lever::hil;
+
+namespace {
+
+SphereConfig traced(SphereConfig c, double duration_s) {
+  c.duration_s = duration_s;
+  c.record_trace = true;
+  return c;
+}
+
+bool same(const Vec3& a, const Vec3& b) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; }
+
+}  // namespace
+
+TEST_CASE("the environment's force is Hooke's law on the penetration, along centre to cursor (eq. 11)",
+          "[hil][sphere]") {
+  SphereConfig c = traced(sphere_variant(SphereDirection::force, codec::Mode::deadband, false, 0.05), 10.0);
+  c.sphere.centre = {0.002, -0.001, 0.0005};  // off the origin, so a formula that ignores s fails
+  const auto r = run_sphere(c);
+  const double u = c.sphere.stiffness, radius = c.sphere.radius_m;
+  int inside = 0, outside = 0;
+  for (const auto& row : r.trace) {
+    if (!row.top_has_position) {
+      CHECK(same(row.environment_force, Vec3{}));
+      continue;
+    }
+    const double dx = row.top_position[0] - c.sphere.centre[0];
+    const double dy = row.top_position[1] - c.sphere.centre[1];
+    const double dz = row.top_position[2] - c.sphere.centre[2];
+    const double distance = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const auto& f = row.environment_force;
+    if (distance >= radius) {
+      ++outside;
+      REQUIRE(same(f, Vec3{}));
+      continue;
+    }
+    ++inside;
+    const double magnitude = u * (radius - distance);
+    INFO("t = " << row.t << " s, distance " << distance);
+    REQUIRE(f[0] == Approx(dx / distance * magnitude).margin(1e-12));
+    REQUIRE(f[1] == Approx(dy / distance * magnitude).margin(1e-12));
+    REQUIRE(f[2] == Approx(dz / distance * magnitude).margin(1e-12));
+    // Outward, and as large as u times the penetration.
+    REQUIRE(f[0] * dx + f[1] * dy + f[2] * dz > 0.0);
+    REQUIRE(std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) == Approx(magnitude).epsilon(1e-9));
+  }
+  // The trace covers both cases many times over.
+  CHECK(inside > 2000);
+  CHECK(outside > 500);
+}
+
+TEST_CASE("the device's velocity is the backward difference of its quantized position, exactly zero at rest",
+          "[hil][sphere]") {
+  SECTION("a hand that holds still: every sample is exactly zero, and only the first is sent") {
+    SphereConfig c = traced(SphereConfig{}, 2.0);
+    c.hand.explore = false;
+    c.hand.tremor_rms_m = 0.0;
+    const auto r = run_sphere(c);
+    for (const auto& row : r.trace) REQUIRE(same(row.velocity, Vec3{}));
+    CHECK(r.zero_velocity_share == 1.0);
+    CHECK(r.velocity_packets == 1u);
+  }
+  SECTION("a hand that holds still but trembles: the tip moves inside its cell, the velocity stays exactly zero") {
+    SphereConfig c = traced(SphereConfig{}, 2.0);
+    c.hand.explore = false;
+    const auto r = run_sphere(c);
+    int moved_in_cell = 0;
+    for (std::size_t k = 1; k < r.trace.size(); ++k) {
+      const auto& row = r.trace[k];
+      if (!same(row.measured, r.trace[k - 1].measured)) continue;
+      REQUIRE(same(row.velocity, Vec3{}));
+      if (!same(row.position, r.trace[k - 1].position)) ++moved_in_cell;
+    }
+    CHECK(moved_in_cell > 1000);  // a velocity from the true position would not be zero here
+  }
+  SECTION("exploring: each sample is (q_k - q_{k-1}) / 1 ms of the quantized positions, zero when they repeat") {
+    const auto r = run_sphere(traced(SphereConfig{}, 10.0));
+    const double resolution = OmniParams{}.resolution_m;
+    int repeats = 0;
+    for (std::size_t k = 1; k < r.trace.size(); ++k) {
+      const auto& row = r.trace[k];
+      const auto& before = r.trace[k - 1];
+      for (std::size_t i = 0; i < 3; ++i) {
+        // On the device's grid.
+        REQUIRE(std::fabs(row.measured[i] / resolution - std::round(row.measured[i] / resolution)) < 1e-6);
+        REQUIRE(std::fabs(row.measured[i] - row.position[i]) <= 0.5 * resolution + 1e-12);
+        REQUIRE(row.velocity[i] == (row.measured[i] - before.measured[i]) / 1e-3);
+      }
+      if (same(row.measured, before.measured)) {
+        ++repeats;
+        REQUIRE(same(row.velocity, Vec3{}));
+      }
+    }
+    CHECK(repeats > 1000);
+  }
+}
+
+TEST_CASE("sphere-3dof is deterministic per seed", "[hil][sphere]") {
+  const SphereConfig c = traced(sphere_variant(SphereDirection::velocity, codec::Mode::predictive, true, 0.1), 5.0);
+  const auto a = run_sphere(c);
+  const auto b = run_sphere(c);
+  REQUIRE(a.trace.size() == b.trace.size());
+  for (std::size_t k = 0; k < a.trace.size(); ++k) {
+    const auto& x = a.trace[k];
+    const auto& y = b.trace[k];
+    REQUIRE(same(x.position, y.position));
+    REQUIRE(same(x.velocity, y.velocity));
+    REQUIRE(same(x.top_position, y.top_position));
+    REQUIRE(same(x.environment_force, y.environment_force));
+    REQUIRE(same(x.displayed_force, y.displayed_force));
+    REQUIRE(x.velocity_sent == y.velocity_sent);
+    REQUIRE(x.force_sent == y.force_sent);
+  }
+  CHECK(a.velocity_packets == b.velocity_packets);
+  CHECK(a.force_packets == b.force_packets);
+  CHECK(a.force_jnd_violation == b.force_jnd_violation);
+
+  SphereConfig other = c;
+  other.seed = 2;
+  const auto d = run_sphere(other);
+  CHECK_FALSE(same(a.trace.back().position, d.trace.back().position));
+}
+
+TEST_CASE("at p = 0 over a lossless link every change is sent and the metric sees no distortion", "[hil][sphere]") {
+  auto check = [](SphereConfig c) {
+    c = traced(c, 10.0);
+    const auto r = run_sphere(c);
+    CHECK(r.force_jnd_violation == 0.0);
+    CHECK(r.downlink_jnd_violation == 0.0);
+    CHECK(r.force_rmse_n < 1e-9);      // the TOP's extrapolation rounds, nothing more
+    CHECK(r.position_rmse_m < 1e-12);  // the extrapolation's rounding, nothing more
+    // Sent exactly when the value differs from the sample before (the first is always sent).
+    std::uint64_t velocity_changes = 1, force_changes = 1;
+    for (std::size_t k = 1; k < r.trace.size(); ++k) {
+      const bool v = !same(r.trace[k].velocity, r.trace[k - 1].velocity);
+      const bool f = !same(r.trace[k].environment_force, r.trace[k - 1].environment_force);
+      REQUIRE(r.trace[k].velocity_sent == v);
+      REQUIRE(r.trace[k].force_sent == f);
+      velocity_changes += v ? 1 : 0;
+      force_changes += f ? 1 : 0;
+    }
+    CHECK(r.velocity_packets == velocity_changes);
+    CHECK(r.force_packets == force_changes);
+    // Contact a fair share of the time, so the zero above is not the zero of free space.
+    CHECK(r.contact_share > 0.3);
+    CHECK(r.mean_contact_force_n > 0.3);
+  };
+  SECTION("the LAN (0.2 ms, jitter 0.1 ms)") { check(SphereConfig{}); }
+  SECTION("no delay") {
+    SphereConfig c;
+    c.network = {0.0, 0.0, 0.0, false};
+    check(c);
+  }
+  SECTION("a WAN-like 12 ms with 3 ms jitter") {
+    SphereConfig c;
+    c.network = {12.0, 3.0, 0.0, false};
+    check(c);
+  }
+}
+
+TEST_CASE("a wider deadband sends fewer packets", "[hil][sphere]") {
+  auto rate = [](SphereDirection d, codec::Mode m, bool filter, double p) {
+    double sum = 0.0;
+    for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+      SphereConfig c = sphere_variant(d, m, filter, p);
+      c.duration_s = 10.0;
+      c.seed = seed;
+      const auto r = run_sphere(c);
+      sum += d == SphereDirection::velocity ? r.velocity_packet_rate : r.force_packet_rate;
+    }
+    return sum / 2.0;
+  };
+  SECTION("force, 3-DoF deadband") {
+    const double p0 = rate(SphereDirection::force, codec::Mode::deadband, false, 0.0);
+    double before = p0;
+    for (const double p : {0.025, 0.05, 0.1, 0.2}) {
+      const double now = rate(SphereDirection::force, codec::Mode::deadband, false, p);
+      INFO("p = " << p << ": " << now << " after " << before);
+      CHECK(now < before);
+      before = now;
+    }
+    CHECK(before < 0.5 * p0);
+  }
+  SECTION("velocity, prediction on filtered data") {
+    double before = rate(SphereDirection::velocity, codec::Mode::predictive, true, 0.0);
+    for (const double p : {0.025, 0.05, 0.1, 0.2}) {
+      const double now = rate(SphereDirection::velocity, codec::Mode::predictive, true, p);
+      INFO("p = " << p << ": " << now << " after " << before);
+      CHECK(now < before);
+      before = now;
+    }
+  }
+}
+
+TEST_CASE("the sphere-3dof table stays within the spread over seeds", "[hil][sphere][regression]") {
+  std::ifstream in(LEVER_SPHERE_3DOF_BOUNDS);
+  REQUIRE(in.good());
+  const auto bounds = nlohmann::json::parse(in);
+  REQUIRE(bounds.at("rows").size() == 8u);
+  auto codec_of = [](const nlohmann::json& j) {
+    return codec::Config<double>{j.at("mode") == "predictive" ? codec::Mode::predictive : codec::Mode::deadband,
+                                 j.at("p").get<double>(), j.at("floor").get<double>(), j.at("filter_hz").get<double>()};
+  };
+  for (const auto& row : bounds.at("rows")) {
+    const std::string name = row.at("name").get<std::string>() + " " + row.at("options").get<std::string>();
+    SECTION(name) {
+      SphereConfig c;
+      c.duration_s = bounds.at("duration_s").get<double>();
+      c.velocity_codec = codec_of(row.at("velocity_codec"));
+      c.force_codec = codec_of(row.at("force_codec"));
+      double velocity = 0, force = 0, jnd = 0, contact = 0;
+      constexpr int kSeeds = 3;
+      for (int seed = 1; seed <= kSeeds; ++seed) {
+        c.seed = static_cast<std::uint64_t>(seed);
+        const auto r = run_sphere(c);
+        velocity += r.velocity_packet_rate / kSeeds;
+        force += r.force_packet_rate / kSeeds;
+        jnd += r.force_jnd_violation / kSeeds;
+        contact += r.contact_share / kSeeds;
+      }
+      auto within = [](const nlohmann::json& b, double v) {
+        return b.at("min").get<double>() <= v && v <= b.at("max").get<double>();
+      };
+      INFO(name << ": velocity " << velocity << " force " << force << " jnd " << jnd << " contact " << contact);
+      CHECK(within(row.at("velocity"), velocity));
+      CHECK(within(row.at("force"), force));
+      CHECK(within(row.at("jnd"), jnd));
+      CHECK(within(row.at("contact"), contact));
+    }
+  }
+}
