@@ -97,7 +97,7 @@ struct Transport {
 
   void service(Nanos from, Nanos now) {
     for (Nanos s = from + step;; s += step) {
-      if (s > now || quiet()) s = now;  // nothing in flight: no frame can reach a bridge before now
+      if (s > now || quiet(now)) s = now;  // nothing on the buses, nothing arriving: nothing to do before now
       hsi_bus->advance_to(s);
       if (top_bus != hsi_bus) top_bus->advance_to(s);
       for (Bridge* b : bridges)
@@ -105,10 +105,10 @@ struct Transport {
       if (s == now) break;
     }
   }
-  bool quiet() const {
+  bool quiet(Nanos now) const {
     if (!hsi_bus->idle() || !top_bus->idle()) return false;
     for (const Bridge* b : bridges)
-      if (b && b->incoming->in_flight()) return false;
+      if (b && b->incoming->arrives_by(now)) return false;
     return true;
   }
 };

@@ -33,7 +33,8 @@ class NetworkLink {
   void set_extra_delay_ms(double ms) { extra_delay_ms_ = ms; }
   void set_burst_loss(double loss) { burst_loss_ = loss; }  // on top of the base loss
 
-  bool in_flight() const { return size_ > 0; }
+  // Some datagram arrives by t.
+  bool arrives_by(Nanos t) const { return size_ > 0 && heap_[0].arrival <= t; }
   const Stats& stats() const { return stats_; }
 
  private:

@@ -60,7 +60,7 @@ class ForceDisplay {
     double integral_limit_n = 5.0;
     // Local viscous damping on the HSI, N m s/rad, applied only while a contact force is displayed: a
     // damped virtual wall keeps the delayed contact loop from bouncing, and free motion stays free of drag.
-    double contact_damping_nms = 0.2;  // docs/hil-model.md, "HSI damping in contact"
+    double contact_damping_nms = 0.6;  // docs/hil-model.md, "HSI damping in contact"
     double contact_threshold_n = 0.1;  // displayed force above which the lever counts as in contact
   };
   struct State {
