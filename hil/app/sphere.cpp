@@ -1,23 +1,20 @@
 #include "sphere.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iterator>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 #include <vector>
 
 #include "lever/program/exit_codes.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
 #include "sweep.hpp"
+#include "sweep_runner.hpp"
 
 namespace lever::hil {
 namespace {
@@ -234,27 +231,20 @@ int run_sphere_sweep(const SweepOptions& o) {
       for (const double p : kPValues)
         for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, direction, p, static_cast<std::uint64_t>(s), {}});
 
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex print;
-  const bool tty = isatty(fileno(stderr));
-  auto worker = [&] {
-    for (std::size_t i = next++; i < jobs.size(); i = next++) {
-      Job& job = jobs[i];
-      SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
-      c.duration_s = o.duration_s;
-      c.seed = job.seed;
-      job.result = run_sphere(c);
-      const std::size_t finished = ++done;
-      std::lock_guard lock(print);
-      if (tty || finished == jobs.size() || finished % 50 == 0)
-        fmt::print(stderr, "{}sweep: {}/{} runs ({} {} p={:.1f} % seed {}){}", tty ? "\r" : "", finished, jobs.size(),
-                   direction_name(job.direction), job.variant->name, 100 * job.p, job.seed, tty ? "   " : "\n");
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < o.jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (tty) fmt::print(stderr, "\n");
+  run_in_parallel(
+      jobs.size(), o.jobs, 50,
+      [&](std::size_t i) {
+        Job& job = jobs[i];
+        SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
+        c.duration_s = o.duration_s;
+        c.seed = job.seed;
+        job.result = run_sphere(c);
+      },
+      [&](std::size_t i) {
+        const Job& job = jobs[i];
+        return fmt::format("{} {} p={:.1f} % seed {}", direction_name(job.direction), job.variant->name, 100 * job.p,
+                           job.seed);
+      });
 
   std::string runs =
       "direction,variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,downlink_jnd_violation,"
@@ -290,12 +280,7 @@ int run_sphere_sweep(const SweepOptions& o) {
   program::OutputFile::write_all((dir / "paper_fig12.csv").string(), kPaperPoints, "--out");
   program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(), "--out");
 
-  if (const int status = run_gnuplot(dir / "plots.gp"); status != 0) {
-    fmt::print(stderr, "lever-hil: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
-               status == 127 ? "could not be started" : fmt::format("failed (exit status {})", status),
-               program::printable(dir.string()));
-    return program::kRuntimeFailure;
-  }
+  if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(
       "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, paper_fig12.csv, "
       "fig12_packet_rates.png, distortion.png, position_error.png\n",

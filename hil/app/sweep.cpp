@@ -1,18 +1,10 @@
 #include "sweep.hpp"
 
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cerrno>
-#include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <mutex>
-#include <thread>
 #include <vector>
 
 #include "lever/hil/simulation.hpp"
@@ -20,6 +12,7 @@
 #include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
 #include "report.hpp"
+#include "sweep_runner.hpp"
 
 namespace lever::hil {
 namespace {
@@ -93,34 +86,6 @@ plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $13 : 1/0):14:15 
 
 }  // namespace
 
-int run_gnuplot(const std::filesystem::path& script) {
-  const std::string path = std::filesystem::absolute(script).string();  // never read as an option
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
-  char* const args[] = {const_cast<char*>("gnuplot"), const_cast<char*>(path.c_str()), nullptr};
-  pid_t pid = 0;
-  const int error = posix_spawnp(&pid, "gnuplot", &actions, nullptr, args, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) return 127;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return 127;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files) {
-  namespace fs = std::filesystem;
-  const fs::path dir(out_dir);
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw program::BadInput(fmt::format("--out {} exists and is not a directory", program::printable(out_dir)));
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", program::printable(out_dir), ec.message()));
-  // Refused now, not after the runs: a file that is a device, a link or a directory.
-  for (const char* name : files) program::OutputFile((dir / name).string(), "--out");
-}
-
 int run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
   const fs::path dir(o.out_dir);
@@ -131,33 +96,24 @@ int run_sweep(const SweepOptions& o) {
     for (const double p : kPValues)
       for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, p, static_cast<std::uint64_t>(s), {}});
 
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex print;
-  const bool tty = isatty(fileno(stderr));
-  auto worker = [&] {
-    for (std::size_t i = next++; i < jobs.size(); i = next++) {
-      Job& job = jobs[i];
-      SimConfig c;
-      c.scenario = o.scenario;
-      c.duration_s = o.duration_s;
-      c.seed = job.seed;
-      const bool filter = job.variant->filter;
-      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
-                          filter ? o.filter_hz_velocity : 0.0};
-      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
-                       filter ? o.filter_hz_force : 0.0};
-      job.result = run_simulation(c);
-      const std::size_t finished = ++done;
-      std::lock_guard lock(print);
-      if (tty || finished == jobs.size() || finished % 20 == 0)
-        fmt::print(stderr, "{}sweep: {}/{} runs ({} p={:.1f} % seed {}){}", tty ? "\r" : "", finished, jobs.size(),
-                   job.variant->name, 100 * job.p, job.seed, tty ? "   " : "\n");
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < o.jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (tty) fmt::print(stderr, "\n");
+  run_in_parallel(
+      jobs.size(), o.jobs, 20,
+      [&](std::size_t i) {
+        Job& job = jobs[i];
+        SimConfig c;
+        c.scenario = o.scenario;
+        c.duration_s = o.duration_s;
+        c.seed = job.seed;
+        const bool filter = job.variant->filter;
+        c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
+                            filter ? o.filter_hz_velocity : 0.0};
+        c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
+                         filter ? o.filter_hz_force : 0.0};
+        job.result = run_simulation(c);
+      },
+      [&](std::size_t i) {
+        return fmt::format("{} p={:.1f} % seed {}", jobs[i].variant->name, 100 * jobs[i].p, jobs[i].seed);
+      });
 
   std::string runs =
       "variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,position_rmse,"
@@ -203,12 +159,7 @@ int run_sweep(const SweepOptions& o) {
   program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(scenario_name(o.scenario), o.seeds),
                                  "--out");
 
-  if (const int status = run_gnuplot(dir / "plots.gp"); status != 0) {
-    fmt::print(stderr, "lever-hil: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
-               status == 127 ? "could not be started" : fmt::format("failed (exit status {})", status),
-               program::printable(dir.string()));
-    return program::kRuntimeFailure;
-  }
+  if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(
       "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, packet_rate_velocity.png, "
       "packet_rate_force.png, distortion.png, position_error.png\n",
