@@ -100,26 +100,25 @@ plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? 
                      kGnuplotScriptDir);
 }
 
-std::string trace_csv(const SphereResult& r) {
+constexpr const char* kTraceHeader =
+    "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
+    "top_x,top_y,top_z,env_force_x,env_force_y,env_force_z,force_sent,displayed_x,displayed_y,"
+    "displayed_z,reference_x,reference_y,reference_z\n";
+
+std::string trace_csv_row(const SphereTraceRow& row) {
   fmt::memory_buffer out;
-  fmt::format_to(std::back_inserter(out),
-                 "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
-                 "top_x,top_y,top_z,env_force_x,env_force_y,env_force_z,force_sent,displayed_x,displayed_y,"
-                 "displayed_z,reference_x,reference_y,reference_z\n");
   auto vec = [&](const Vec3& v) { fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", v[0], v[1], v[2]); };
-  for (const auto& row : r.trace) {
-    fmt::format_to(std::back_inserter(out), "{:.3f}", row.t);
-    vec(row.position);
-    vec(row.measured);
-    vec(row.velocity);
-    fmt::format_to(std::back_inserter(out), ",{:d}", row.velocity_sent ? 1 : 0);
-    vec(row.top_position);
-    vec(row.environment_force);
-    fmt::format_to(std::back_inserter(out), ",{:d}", row.force_sent ? 1 : 0);
-    vec(row.displayed_force);
-    vec(row.reference_force);
-    out.push_back('\n');
-  }
+  fmt::format_to(std::back_inserter(out), "{:.3f}", row.t);
+  vec(row.position);
+  vec(row.measured);
+  vec(row.velocity);
+  fmt::format_to(std::back_inserter(out), ",{:d}", row.velocity_sent ? 1 : 0);
+  vec(row.top_position);
+  vec(row.environment_force);
+  fmt::format_to(std::back_inserter(out), ",{:d}", row.force_sent ? 1 : 0);
+  vec(row.displayed_force);
+  vec(row.reference_force);
+  out.push_back('\n');
   return fmt::to_string(out);
 }
 
@@ -190,13 +189,14 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
 int run_sphere_command(const SphereConfig& config, bool json, const std::string& trace_path) {
   SphereConfig c = config;
   c.record_trace = !trace_path.empty();
-  std::optional<program::OutputFile> trace;  // checked before the run
-  if (!trace_path.empty()) trace.emplace(trace_path, "--trace");
-  const SphereResult r = run_sphere(c);
-  if (trace) {
-    trace->write(trace_csv(r));
-    trace->commit();
+  std::optional<program::OutputFile> trace;  // checked before the run, streamed as it goes
+  if (!trace_path.empty()) {
+    trace.emplace(trace_path, "--trace");
+    trace->write(kTraceHeader);
+    c.trace_sink = [&trace](const SphereTraceRow& row) { trace->write(trace_csv_row(row)); };
   }
+  const SphereResult r = run_sphere(c);
+  if (trace) trace->commit();
   std::FILE* out = trace && trace->is_stdout() ? stderr : stdout;  // the trace has stdout
   if (json) {
     fmt::print(out, "{}\n", sphere_report_json(c, r).dump());
