@@ -6,11 +6,13 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
-#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lever/program/choices.hpp"
+#include "lever/program/numbers.hpp"
+#include "lever/program/output_file.hpp"
 #include "lever/program/parse.hpp"
 #include "report.hpp"
 #include "serve.hpp"
@@ -22,22 +24,29 @@ namespace {
 using namespace lever::hil;
 using lever::codec::Mode;
 
-constexpr int kBadInput = lever::program::kBadInput;
+namespace program = lever::program;
+constexpr int kBadInput = program::kBadInput;
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
-const std::map<std::string, ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
-                                                     {"free-motion", ScenarioKind::free_motion},
-                                                     {"press-hold", ScenarioKind::press_hold},
-                                                     {"sphere-3dof", ScenarioKind::sphere_3dof}};
-const std::map<std::string, Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
-const std::map<std::string, lever::fw::MotionVelocity> kMotionVelocities{
+const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
+                                                {"free-motion", ScenarioKind::free_motion},
+                                                {"press-hold", ScenarioKind::press_hold},
+                                                {"sphere-3dof", ScenarioKind::sphere_3dof}};
+const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
+const program::Choices<lever::fw::MotionVelocity> kMotionVelocities{
     {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
-const std::map<std::string, lever::fw::PassivityMode> kPassivity{{"off", lever::fw::PassivityMode::off},
-                                                                 {"observe", lever::fw::PassivityMode::observe},
-                                                                 {"tdpa", lever::fw::PassivityMode::tdpa}};
-const std::map<std::string, Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+const program::Choices<lever::fw::PassivityMode> kPassivity{{"off", lever::fw::PassivityMode::off},
+                                                            {"observe", lever::fw::PassivityMode::observe},
+                                                            {"tdpa", lever::fw::PassivityMode::tdpa}};
+const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+// Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
+constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
+constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
+constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
+// A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
+constexpr program::Bounds kNetworkMs{0.0, 60000.0, false, false, "a time in ms"};
 
 struct RunOptions {
   SimConfig config;
@@ -56,7 +65,7 @@ struct RunOptions {
   double gauge_rate_hz = StrainGaugeParams{}.output_rate_hz();
 };
 
-// A number in [lo, hi], or exactly 0 when zero_ok; CLI::Range alone lets "nan" through.
+// A number in [lo, hi], or exactly 0 when zero_ok (program::number has no "0 or" form).
 CLI::Validator number_in(double lo, double hi, bool zero_ok = false) {
   return CLI::Validator(
       [=](std::string& text) -> std::string {
@@ -80,63 +89,66 @@ int averaging_for(double rate_hz) {
 void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--scenario", o.config.scenario,
                  "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
-      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
   cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
-      ->check(CLI::Range(0.01, 86400.0))
+      ->check(program::number(kRunSeconds))
       ->default_str("20");
-  cmd.add_option("--seed", o.config.seed, "random seed (operator, gauge noise, network)")->default_str("1");
+  cmd.add_option("--seed", o.config.seed, "random seed (operator, gauge noise, network)")
+      ->check(program::seed())
+      ->default_str("1");
   cmd.add_option("--mode", o.mode, "deadband or predictive, both directions")
-      ->transform(CLI::CheckedTransformer(kModes))
+      ->transform(program::one_of(kModes))
       ->default_str("deadband");
   cmd.add_option("--mode-velocity", o.mode_velocity, "mode for HSI->TOP velocity (overrides --mode)")
-      ->transform(CLI::CheckedTransformer(kModes));
+      ->transform(program::one_of(kModes));
   cmd.add_option("--mode-force", o.mode_force, "mode for TOP->HSI force (overrides --mode)")
-      ->transform(CLI::CheckedTransformer(kModes));
+      ->transform(program::one_of(kModes));
   cmd.add_option("--p", o.p, "deadband p for both directions (0.1 = 10 %)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(program::kWeberFraction))
       ->default_str("0.1");
   cmd.add_option("--p-velocity", o.p_velocity, "p for HSI->TOP velocity (overrides --p)")
-      ->check(CLI::NonNegativeNumber);
-  cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")->check(CLI::NonNegativeNumber);
+      ->check(program::number(program::kWeberFraction));
+  cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
+      ->check(program::number(program::kWeberFraction));
   cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
                  "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
                  "estimate (its smooth velocity estimate)")
-      ->transform(CLI::CheckedTransformer(kMotionVelocities))
+      ->transform(program::one_of(kMotionVelocities))
       ->default_str("difference");
   cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(kFloorVelocity))
       ->default_str("0");
   cmd.add_option("--floor-force", o.floor_force, "force deadband floor, N (0: the paper's rule)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(kFloorForce))
       ->default_str("0");
   cmd.add_option("--filter-hz", o.filter_hz, "prefilter cut-off for both directions (0: off)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(program::kCutoffAt1kHz))
       ->default_str("0");
   cmd.add_option("--filter-hz-velocity", o.filter_hz_velocity, "prefilter cut-off for velocity (overrides --filter-hz)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(program::number(program::kCutoffAt1kHz));
   cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(program::number(program::kCutoffAt1kHz));
   cmd.add_option("--topology", o.config.topology,
                  "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
                  "over the network)")
-      ->transform(CLI::CheckedTransformer(kTopologies))
+      ->transform(program::one_of(kTopologies))
       ->default_str("two-sites");
   cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(kNetworkMs))
       ->default_str("0");
   cmd.add_option("--jitter-ms", o.config.network.jitter_ms, "network jitter (uniform, added)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(program::number(kNetworkMs))
       ->default_str("0");
   cmd.add_option("--loss", o.config.network.loss, "datagram loss probability")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(program::number({0.0, 1.0, false, false, "a probability"}))
       ->default_str("0");
   cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
-      ->check(CLI::Range(1.0, 10000.0))
+      ->check(program::whole(1, 10000, "a whole number of milliseconds"))
       ->default_str(std::to_string(lever::fw::LeverConfig{}.comms_timeout));
   cmd.add_option("--passivity", o.passivity,
                  "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
-      ->transform(CLI::CheckedTransformer(kPassivity))
+      ->transform(program::one_of(kPassivity))
       ->default_str("off");
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
@@ -163,13 +175,14 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
           "600 / 2^k"))
       ->default_str(fmt::format("{}", gauge.output_rate_hz()));
   cmd.add_option("--gauge-noise-n", o.config.gauge.noise_n, "the force amplifier's noise per conversion, N rms")
-      ->check(number_in(0.0, 1.0))
+      ->check(program::number({0.0, 1.0, false, false, "a noise in N rms"}))
       ->default_str(fmt::format("{}", gauge.noise_n));
   cmd.add_option("--gauge-step-n", o.config.gauge.step_n, "the force amplifier's display step, N")
-      ->check(number_in(1e-6, 1.0))
+      ->check(program::number({1e-6, 1.0, false, false, "a step in N"}))
       ->default_str(fmt::format("{}", gauge.step_n));
   cmd.add_flag("--json", o.json, "print one JSON object");
-  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace");
+  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace, atomically, as the run goes ('-': stdout)")
+      ->check(program::path());
 }
 
 SimConfig finish(RunOptions& o) {
@@ -182,7 +195,13 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.passivity.mode = o.passivity;
   c.top_firmware.passivity.mode = o.passivity;
-  for (const auto& f : o.faults) c.faults.push_back(parse_fault_spec(f));
+  for (const auto& f : o.faults) {
+    c.faults.push_back(parse_fault_spec(f));
+    if (c.faults.back().start_s >= c.duration_s)
+      throw program::BadInput(fmt::format("fault '{}' starts at {} s, after the run's {} s (--duration)",
+                                          program::printable(f), program::short_number(c.faults.back().start_s),
+                                          program::short_number(c.duration_s)));
+  }
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);
   const auto& n = c.network;
@@ -194,37 +213,32 @@ SimConfig finish(RunOptions& o) {
   return c;
 }
 
-void write_trace(const std::string& path, const SimResult& r) {
-  std::string out = trace_csv_header();
-  for (const auto& row : r.trace) out += trace_csv_row(row);
-  std::ofstream f(path);
-  f << out;
-  if (!f) throw std::runtime_error("cannot write trace " + path);
-}
-
-void print_human(const SimConfig& c, const SimResult& r) {
-  fmt::print("{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n", scenario_name(c.scenario),
-             c.duration_s, c.seed, c.velocity_codec.mode == Mode::predictive ? "predictive" : "deadband",
-             c.velocity_codec.p, c.velocity_codec.floor,
-             c.force_codec.mode == Mode::predictive ? "predictive" : "deadband", c.force_codec.p, c.force_codec.floor);
-  fmt::print("  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
+void print_human(std::FILE* out, const SimConfig& c, const SimResult& r) {
+  fmt::print(out, "{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n",
+             scenario_name(c.scenario), c.duration_s, c.seed,
+             c.velocity_codec.mode == Mode::predictive ? "predictive" : "deadband", c.velocity_codec.p,
+             c.velocity_codec.floor, c.force_codec.mode == Mode::predictive ? "predictive" : "deadband",
+             c.force_codec.p, c.force_codec.floor);
+  fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
-  fmt::print("  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
+  fmt::print(out,
+             "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
   fmt::print(
+      out,
       "  by cause: {:.1f} % beside the measurement {} tick(s) earlier (codec, filter, loss, jitter); codec alone "
       "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
       100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
       100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
-  fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
+  fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);
   if (c.homing)
-    fmt::print("  before the scenario: both levers powered up at random angles, homed and armed after {:.2f} s\n",
+    fmt::print(out, "  before the scenario: both levers powered up at random angles, homed and armed after {:.2f} s\n",
                r.homed_at_s);
   if (r.hsi_overruns + r.top_overruns + r.hsi_edges_lost + r.top_edges_lost > 0)
-    fmt::print("  late steps: HSI {}, TOP {}; encoder edges lost: HSI {}, TOP {}\n", r.hsi_overruns, r.top_overruns,
-               r.hsi_edges_lost, r.top_edges_lost);
+    fmt::print(out, "  late steps: HSI {}, TOP {}; encoder edges lost: HSI {}, TOP {}\n", r.hsi_overruns,
+               r.top_overruns, r.hsi_edges_lost, r.top_edges_lost);
   for (const auto& f : r.faults) {
     auto say = [](const FaultReport::LeverReaction& x) {
       if (!x.fault_at_s) return std::string("no fault raised");
@@ -235,7 +249,7 @@ void print_human(const SimConfig& c, const SimResult& r) {
                          names, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
                          x.rearmed_at_s ? fmt::format("at {:.3f} s", *x.rearmed_at_s) : "never");
     };
-    fmt::print("  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));
+    fmt::print(out, "  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));
   }
 }
 
@@ -245,7 +259,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Hardware-in-the-loop simulator of the lever teleoperation testbed: the real firmware core, two "
       "levers, a stiff wall, a human operator, CAN buses and an IP link, in deterministic simulated time."};
-  app.name("lever-hil");
+  program::describe(app, "lever-hil");
   app.require_subcommand(1);
   RunOptions run_options;
   auto* run = app.add_subcommand("run", "simulate one scenario and report packet rates, distortion and faults");
@@ -254,29 +268,32 @@ int main(int argc, char** argv) {
   SweepOptions sweep_options;
   auto* sweep = app.add_subcommand("sweep", "sweep p for each mode and seed; CSV and gnuplot PNG plots");
   sweep->add_option("--scenario", sweep_options.scenario, "scenario")
-      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
-  sweep->add_option("--out", sweep_options.out_dir, "output directory")->required();
-  sweep->add_option("--seeds", sweep_options.seeds, "seeds per point")->check(CLI::Range(1, 100))->default_str("3");
+  sweep->add_option("--out", sweep_options.out_dir, "output directory")->required()->check(program::path());
+  sweep->add_option("--seeds", sweep_options.seeds, "seeds per point")->check(program::whole(1, 100))->default_str("3");
   sweep->add_option("--duration", sweep_options.duration_s, "simulated seconds per run")
-      ->check(CLI::Range(0.1, 3600.0))
+      ->check(program::number({0.1, 3600.0, false, false, "a duration in seconds"}))
       ->default_str("20");
-  sweep->add_option("--jobs", sweep_options.jobs, "parallel runs")->check(CLI::Range(1, 64))->default_str("2");
+  sweep->add_option("--jobs", sweep_options.jobs, "parallel runs")->check(program::whole(1, 64))->default_str("2");
+  // The +floor and +filter variants must differ from the ones without: 0 is refused here, unlike in run.
   sweep->add_option("--floor-velocity", sweep_options.floor_velocity, "velocity floor of the +floor variant, rad/s")
+      ->check(program::number({0.0, 65.535, true, false, "a floor in rad/s"}))
       ->default_str("0.02");
   sweep->add_option("--floor-force", sweep_options.floor_force, "force floor of the +floor variant, N")
+      ->check(program::number({0.0, 65.535, true, false, "a floor in N"}))
       ->default_str("0.05");
   sweep
       ->add_option("--filter-hz-velocity", sweep_options.filter_hz_velocity,
                    "velocity prefilter cut-off of the filter variants, Hz (0: off); 30: beyond the 20-30 Hz of "
                    "kinesthetic motion sensing")
-      ->check(CLI::Range(0.0, 499.0))
+      ->check(program::number(program::kCutoffAt1kHz))
       ->default_str("30");
   sweep
       ->add_option("--filter-hz-force", sweep_options.filter_hz_force,
                    "force prefilter cut-off of the filter variants, Hz (0: off); off: force is felt up to about "
                    "1 kHz, beyond the loop's Nyquist")
-      ->check(CLI::Range(0.0, 499.0))
+      ->check(program::number(program::kCutoffAt1kHz))
       ->default_str("0");
 
   ServeOptions serve_options;
@@ -291,39 +308,49 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   serve->add_option("--scenario", serve_options.scenario, "wall-tap (the paper's task), free-motion or press-hold")
-      ->transform(CLI::CheckedTransformer(kScenarios))
+      ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
   serve
       ->add_option("--duration", serve_options.duration_s,
                    "seconds of scenario once both levers are armed (0: until SIGINT or SIGTERM)")
-      ->check(CLI::Range(0.0, 86400.0))
+      ->check(program::number({0.0, 86400.0, false, false, "a duration in seconds"}))
       ->default_str("20");
   serve->add_option("--arm-timeout", serve_options.arm_timeout_s, "seconds to wait for both levers to be armed")
-      ->check(CLI::Range(1.0, 86400.0))
+      ->check(program::number({1.0, 86400.0, false, false, "a time in seconds"}))
       ->default_str("300");
   serve->add_option("--seed", serve_options.seed, "random seed (power-up angles, operator, gauge noise)")
+      ->check(program::seed())
       ->default_str("1");
   serve->add_option("--max-edge-rate", serve_options.max_edge_rate_hz, "encoder edges per second at most, per lever")
-      ->check(CLI::Range(100.0, 1e6))
+      ->check(program::number({100.0, 1e6, false, false, "a rate in edges per second"}))
       ->default_str("20000");
   serve->add_flag("--hands-off", serve_options.hands_off,
                   "the operator never takes the handle: the levers rest where their firmware puts them");
   serve->add_flag("--json", serve_options.json, "print the report as one JSON object");
-  serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns)");
+  serve->add_option("--trace", serve_options.trace, "write a per-tick CSV trace (lever-hil run's columns; '-': stdout)")
+      ->check(program::path());
 
   if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
 
   try {
     if (run->parsed()) {
-      const SimConfig config = finish(run_options);
+      SimConfig config = finish(run_options);
       if (config.scenario == ScenarioKind::sphere_3dof)
         return run_sphere_command(sphere_config_from(config), run_options.json, run_options.trace);
+      // The trace streams to its file as the run goes: an hour of it is 1 GB, never held whole.
+      std::optional<program::OutputFile> trace;
+      if (!run_options.trace.empty()) {
+        trace.emplace(run_options.trace, "--trace");
+        trace->write(trace_csv_header());
+        config.trace_sink = [&trace](const TraceRow& row) { trace->write(trace_csv_row(row)); };
+      }
       const SimResult result = run_simulation(config);
-      if (!run_options.trace.empty()) write_trace(run_options.trace, result);
+      if (trace) trace->commit();
+      std::FILE* out = trace && trace->is_stdout() ? stderr : stdout;  // the trace has stdout
       if (run_options.json) {
-        fmt::print("{}\n", report_json(config, result).dump());
+        fmt::print(out, "{}\n", report_json(config, result).dump());
       } else {
-        print_human(config, result);
+        print_human(out, config, result);
       }
       return 0;
     }
@@ -337,10 +364,10 @@ int main(int argc, char** argv) {
     if (sweep_options.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(sweep_options);
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {
-    fmt::print(stderr, "lever-hil: {}\n", e.what());
+    fmt::print(stderr, "lever-hil: {}\n", program::printable(e.what(), 400));
     return kBadInput;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "lever-hil: {}\n", e.what());
-    return 1;
+    fmt::print(stderr, "lever-hil: {}\n", program::printable(e.what(), 400));
+    return program::kRuntimeFailure;
   }
 }

@@ -23,6 +23,8 @@
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
 #include "lever/hil/world.hpp"
+#include "lever/program/exit_codes.hpp"
+#include "lever/program/output_file.hpp"
 #include "lever/protocol/faults.hpp"
 #include "report.hpp"
 
@@ -30,8 +32,8 @@ namespace lever::hil {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr int kRuntimeFailure = 1;
-constexpr int kBadInput = 2;
+constexpr int kRuntimeFailure = program::kRuntimeFailure;
+constexpr int kBadInput = program::kBadInput;
 // A lever heard within this is alive; lever-fw's heartbeat period is 25 ms by default, and the guest's
 // emulated clock stretches it.
 constexpr std::int64_t kHeardWindowMs = 250;
@@ -135,6 +137,14 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
     return kBadInput;
   }
 
+  // Checked before any device is opened. Written as the run goes and renamed into place when it ends (by its duration
+  // or a signal).
+  std::optional<program::OutputFile> trace;
+  if (!o.trace.empty()) {
+    trace.emplace(o.trace, "--trace");
+    trace->write(trace_csv_header());
+  }
+
   // The same physical world as lever-hil run: power-up angles drawn the same way, the same models.
   SimConfig sim;
   sim.scenario = o.scenario;
@@ -163,15 +173,6 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
   }
   auto& watch = watch_result.value();
 
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
-  if (!o.trace.empty()) {
-    trace.reset(std::fopen(o.trace.c_str(), "w"));
-    if (!trace) {
-      fmt::print(stderr, "lever-hil serve: cannot write the trace {}: {}\n", o.trace, std::strerror(errno));
-      return kRuntimeFailure;
-    }
-    std::fputs(trace_csv_header().c_str(), trace.get());
-  }
   fmt::print(
       stderr,
       "lever-hil serve: levers powered up at {:+.3f} rad (HSI) and {:+.3f} rad (TOP); waiting for both to be "
@@ -285,7 +286,7 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
                          static_cast<int>(force_sent),
                          state_number(hsi_watch),
                          state_number(top_watch)};
-      std::fputs(trace_csv_row(row).c_str(), trace.get());
+      trace->write(trace_csv_row(row));
     }
     if (t_ticks % 1000 == 0) {
       fmt::print(stderr,
@@ -298,6 +299,7 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
     if (scenario_ticks > 0 && t_ticks >= scenario_ticks) break;
   }
 
+  if (trace) trace->commit();
   metrics.finish(result);
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const double scenario_s = scenario_start ? static_cast<double>(tick - *scenario_start) * 1e-3 : 0.0;
@@ -321,18 +323,21 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop) {
       {"gauge_requests", top->gauge ? top->gauge->counters().requests : 0},
       {"can_frames_seen", watch.frames_read()},
   };
+  std::FILE* out = trace && trace->is_stdout() ? stderr : stdout;  // the trace has stdout
   if (o.json) {
-    fmt::print("{}\n", report.dump());
+    fmt::print(out, "{}\n", report.dump());
   } else {
-    fmt::print("served {:.1f} s of {} after {:.1f} s of homing and arming\n", scenario_s, scenario_name(o.scenario),
-               result.homed_at_s);
-    fmt::print("  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz (while both armed: {:.1f} s)\n",
+    fmt::print(out, "served {:.1f} s of {} after {:.1f} s of homing and arming\n", scenario_s,
+               scenario_name(o.scenario), result.homed_at_s);
+    fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz (while both armed: {:.1f} s)\n",
                100 * result.velocity_packet_rate, 100 * result.force_packet_rate,
                1e-3 * static_cast<double>(result.armed_ticks));
-    fmt::print("  position rmse {:.2f} mrad (max {:.2f}), force rmse {:.3f} N, force off by more than a JND {:.1f} %\n",
+    fmt::print(out,
+               "  position rmse {:.2f} mrad (max {:.2f}), force rmse {:.3f} N, force off by more than a JND {:.1f} %\n",
                1000 * result.position_rmse_rad, 1000 * extras.max_position_error_rad, result.force_rmse_n,
                100 * result.force_jnd_violation);
-    fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average; the world slipped {} times (max lag {} ms)\n",
+    fmt::print(out,
+               "  in contact {:.0f} % of the time at {:.2f} N on average; the world slipped {} times (max lag {} ms)\n",
                100 * result.contact_share, result.mean_contact_force_n, extras.slips, extras.max_lag_ms);
   }
   return 0;

@@ -1,18 +1,20 @@
 #include "sphere.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iterator>
-#include <mutex>
+#include <optional>
 #include <stdexcept>
-#include <thread>
 #include <vector>
+
+#include "lever/program/exit_codes.hpp"
+#include "lever/program/output_file.hpp"
+#include "lever/program/text.hpp"
+#include "sweep.hpp"
+#include "sweep_runner.hpp"
 
 namespace lever::hil {
 namespace {
@@ -59,17 +61,17 @@ constexpr char kPaperPoints[] =
     "force,3-DoF LP+filter,2.5,7.4,7.4 % for force at 2.5 %\n"
     "velocity,3-DoF LP+filter,7.5,8.7,8.7 % for velocity at 7.5 %\n";
 
-std::string gnuplot_script(const std::filesystem::path& dir) {
-  return fmt::format(R"gp(set terminal pngcairo size 1200,520 font ",11"
+std::string gnuplot_script() {
+  return fmt::format(R"gp({0}set terminal pngcairo size 1200,520 font ",11"
 set datafile separator ","
 set grid
 set key top right
 set xlabel "deadband parameter p [%]"
 set xrange [0:40]
-file = "{0}/summary.csv"
-paper = "{0}/paper_fig12.csv"
+file = dir . "summary.csv"
+paper = dir . "paper_fig12.csv"
 v(i) = i == 1 ? "3-DoF" : i == 2 ? "3-DoF LP" : "3-DoF LP+filter"
-set output "{0}/fig12_packet_rates.png"
+set output dir . "fig12_packet_rates.png"
 set multiplot layout 1,2 title "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text)"
 set ylabel "packet rate [% of 1 kHz]"
 set yrange [0:100]
@@ -80,7 +82,7 @@ set title "force TOP -> OP (deadband on force)"
 plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $5 : 1/0) with linespoints lc i dt i title v(i), \
      for [i=1:3] paper using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $4 : 1/0) with points pt 7 ps 1.6 lc i title "paper ".v(i)
 unset multiplot
-set output "{0}/distortion.png"
+set output dir . "distortion.png"
 set multiplot layout 1,2 title "sphere-3dof: displayed force off the undistorted system's by more than a JND"
 set ylabel "share of time [%]"
 set yrange [0:*]
@@ -90,34 +92,33 @@ set title "deadband on force"
 plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $6 : 1/0) with linespoints lc i dt i title v(i)
 unset multiplot
 set terminal pngcairo size 900,600 font ",11"
-set output "{0}/position_error.png"
+set output dir . "position_error.png"
 set title "sphere-3dof: TOP position error, deadband on velocity"
 set ylabel "position RMSE [um]"
 plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $9 : 1/0) with linespoints lc i dt i title v(i)
 )gp",
-                     dir.string());
+                     kGnuplotScriptDir);
 }
 
-std::string trace_csv(const SphereResult& r) {
+constexpr const char* kTraceHeader =
+    "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
+    "top_x,top_y,top_z,env_force_x,env_force_y,env_force_z,force_sent,displayed_x,displayed_y,"
+    "displayed_z,reference_x,reference_y,reference_z\n";
+
+std::string trace_csv_row(const SphereTraceRow& row) {
   fmt::memory_buffer out;
-  fmt::format_to(std::back_inserter(out),
-                 "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
-                 "top_x,top_y,top_z,env_force_x,env_force_y,env_force_z,force_sent,displayed_x,displayed_y,"
-                 "displayed_z,reference_x,reference_y,reference_z\n");
   auto vec = [&](const Vec3& v) { fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", v[0], v[1], v[2]); };
-  for (const auto& row : r.trace) {
-    fmt::format_to(std::back_inserter(out), "{:.3f}", row.t);
-    vec(row.position);
-    vec(row.measured);
-    vec(row.velocity);
-    fmt::format_to(std::back_inserter(out), ",{:d}", row.velocity_sent ? 1 : 0);
-    vec(row.top_position);
-    vec(row.environment_force);
-    fmt::format_to(std::back_inserter(out), ",{:d}", row.force_sent ? 1 : 0);
-    vec(row.displayed_force);
-    vec(row.reference_force);
-    out.push_back('\n');
-  }
+  fmt::format_to(std::back_inserter(out), "{:.3f}", row.t);
+  vec(row.position);
+  vec(row.measured);
+  vec(row.velocity);
+  fmt::format_to(std::back_inserter(out), ",{:d}", row.velocity_sent ? 1 : 0);
+  vec(row.top_position);
+  vec(row.environment_force);
+  fmt::format_to(std::back_inserter(out), ",{:d}", row.force_sent ? 1 : 0);
+  vec(row.displayed_force);
+  vec(row.reference_force);
+  out.push_back('\n');
   return fmt::to_string(out);
 }
 
@@ -188,29 +189,33 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
 int run_sphere_command(const SphereConfig& config, bool json, const std::string& trace_path) {
   SphereConfig c = config;
   c.record_trace = !trace_path.empty();
-  const SphereResult r = run_sphere(c);
+  std::optional<program::OutputFile> trace;  // checked before the run, streamed as it goes
   if (!trace_path.empty()) {
-    std::ofstream f(trace_path);
-    f << trace_csv(r);
-    if (!f) throw std::runtime_error("cannot write trace " + trace_path);
+    trace.emplace(trace_path, "--trace");
+    trace->write(kTraceHeader);
+    c.trace_sink = [&trace](const SphereTraceRow& row) { trace->write(trace_csv_row(row)); };
   }
+  const SphereResult r = run_sphere(c);
+  if (trace) trace->commit();
+  std::FILE* out = trace && trace->is_stdout() ? stderr : stdout;  // the trace has stdout
   if (json) {
-    fmt::print("{}\n", sphere_report_json(c, r).dump());
+    fmt::print(out, "{}\n", sphere_report_json(c, r).dump());
     return 0;
   }
-  fmt::print("sphere-3dof for {} s (seed {}), velocity {} p={} filter={} Hz, force {} p={} filter={} Hz\n",
+  fmt::print(out, "sphere-3dof for {} s (seed {}), velocity {} p={} filter={} Hz, force {} p={} filter={} Hz\n",
              c.duration_s, c.seed, mode_name(c.velocity_codec.mode), c.velocity_codec.p, c.velocity_codec.filter_hz,
              mode_name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
-  fmt::print("  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
+  fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
-  fmt::print("  in contact {:.0f} % of the time at {:.2f} N on average (above the device's peak {:.1f} %)\n",
+  fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average (above the device's peak {:.1f} %)\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * r.saturated_share);
   fmt::print(
+      out,
       "  force off the undistorted system's by more than a JND {:.1f} % of the time (off the TOP's own {:.1f} %), rmse "
       "{:.3f} N; TOP position rmse {:.0f} um, max {:.0f} um\n",
       100 * r.force_jnd_violation, 100 * r.downlink_jnd_violation, r.force_rmse_n, 1e6 * r.position_rmse_m,
       1e6 * r.position_max_error_m);
-  fmt::print("  velocity exactly zero in {:.0f} % of samples; mean speed {:.0f} mm/s; {:.0f}x real time\n",
+  fmt::print(out, "  velocity exactly zero in {:.0f} % of samples; mean speed {:.0f} mm/s; {:.0f}x real time\n",
              100 * r.zero_velocity_share, 1000 * r.mean_speed_mps, r.realtime_factor);
   return 0;
 }
@@ -218,9 +223,7 @@ int run_sphere_command(const SphereConfig& config, bool json, const std::string&
 int run_sphere_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
   const fs::path dir(o.out_dir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", o.out_dir, ec.message()));
+  prepare_sweep_dir(o.out_dir, {"sweep.csv", "summary.csv", "paper_fig12.csv", "plots.gp"});
 
   std::vector<Job> jobs;
   for (const auto direction : kDirections)
@@ -228,27 +231,20 @@ int run_sphere_sweep(const SweepOptions& o) {
       for (const double p : kPValues)
         for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, direction, p, static_cast<std::uint64_t>(s), {}});
 
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex print;
-  const bool tty = isatty(fileno(stderr));
-  auto worker = [&] {
-    for (std::size_t i = next++; i < jobs.size(); i = next++) {
-      Job& job = jobs[i];
-      SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
-      c.duration_s = o.duration_s;
-      c.seed = job.seed;
-      job.result = run_sphere(c);
-      const std::size_t finished = ++done;
-      std::lock_guard lock(print);
-      if (tty || finished == jobs.size() || finished % 50 == 0)
-        fmt::print(stderr, "{}sweep: {}/{} runs ({} {} p={:.1f} % seed {}){}", tty ? "\r" : "", finished, jobs.size(),
-                   direction_name(job.direction), job.variant->name, 100 * job.p, job.seed, tty ? "   " : "\n");
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < o.jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (tty) fmt::print(stderr, "\n");
+  run_in_parallel(
+      jobs.size(), o.jobs, 50,
+      [&](std::size_t i) {
+        Job& job = jobs[i];
+        SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
+        c.duration_s = o.duration_s;
+        c.seed = job.seed;
+        job.result = run_sphere(c);
+      },
+      [&](std::size_t i) {
+        const Job& job = jobs[i];
+        return fmt::format("{} {} p={:.1f} % seed {}", direction_name(job.direction), job.variant->name, 100 * job.p,
+                           job.seed);
+      });
 
   std::string runs =
       "direction,variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,downlink_jnd_violation,"
@@ -279,17 +275,12 @@ int run_sphere_sweep(const SweepOptions& o) {
                            direction_name(jobs[i].direction), jobs[i].variant->name, 100 * jobs[i].p, 100 * v / n,
                            100 * f / n, 100 * jnd / n, 100 * down / n, 100 * contact / n, 1e6 * pos / n, frms / n);
   }
-  std::ofstream(dir / "sweep.csv") << runs;
-  std::ofstream(dir / "summary.csv") << summary;
-  std::ofstream(dir / "paper_fig12.csv") << kPaperPoints;
-  std::ofstream(dir / "plots.gp") << gnuplot_script(dir);
+  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
+  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
+  program::OutputFile::write_all((dir / "paper_fig12.csv").string(), kPaperPoints, "--out");
+  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(), "--out");
 
-  const std::string command = fmt::format("gnuplot '{}' 2>&1", (dir / "plots.gp").string());
-  if (std::system(command.c_str()) != 0) {
-    fmt::print(stderr, "lever-hil: gnuplot failed; the CSV files are in {} (install gnuplot-nox for plots)\n",
-               dir.string());
-    return 1;
-  }
+  if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(
       "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, paper_fig12.csv, "
       "fig12_packet_rates.png, distortion.png, position_error.png\n",

@@ -1,19 +1,18 @@
 #include "sweep.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
-#include <atomic>
-#include <cstdio>
-#include <cstdlib>
+#include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <mutex>
-#include <thread>
+#include <limits>
 #include <vector>
 
 #include "lever/hil/simulation.hpp"
+#include "lever/program/exit_codes.hpp"
+#include "lever/program/output_file.hpp"
+#include "lever/program/text.hpp"
 #include "report.hpp"
+#include "sweep_runner.hpp"
 
 namespace lever::hil {
 namespace {
@@ -42,42 +41,47 @@ struct Job {
   SimResult result;
 };
 
-std::string gnuplot_script(const std::filesystem::path& dir, const std::string& scenario) {
-  // Rates and distortion are means over seeds, from summary.csv (one block per variant).
-  return fmt::format(R"gp(set terminal pngcairo size 900,600 font ",11"
+// The plot script names no path: it finds its data beside itself (ARG0, set however gnuplot is started), so
+// a directory's name is data and never gnuplot code, and the script runs from any directory.
+std::string gnuplot_script(const std::string& scenario, int seeds) {
+  return fmt::format(R"gp(# lever-hil sweep: plots from summary.csv beside this script; run it as `gnuplot plots.gp`.
+{2}file = dir . "summary.csv"
+set terminal pngcairo size 900,650 font ",11"
 set datafile separator ","
-set key top right
+# The legend below the plot, never over the curves.
+set key below horizontal
 set grid
 set xlabel "deadband parameter p [%]"
 set xrange [0:25]
+spread = "mean of {1} seed{3}; bars: min to max"
 variants = "deadband predictive predictive+filter deadband+floor predictive+filter+floor"
-file = "{0}/summary.csv"
-set output "{0}/packet_rate_velocity.png"
-set title "{1}: velocity packets HSI -> TOP (cf. the paper's Fig. 8)"
+# columns: variant,p_percent,seeds, then mean,min,max of each metric
+set output dir . "packet_rate_velocity.png"
+set title "{0}: velocity packets HSI -> TOP (cf. the paper's Fig. 8)\n" . spread
 set ylabel "packet rate [% of 1 kHz]"
 set yrange [0:100]
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $3 : 1/0) with linespoints title word(variants,i), \
+plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $4 : 1/0):5:6 with yerrorlines title word(variants,i), \
      "-" using 1:2 with points pt 7 ps 1.5 lc rgb "black" title "paper, Fig. 8"
 10,25
 e
-set output "{0}/packet_rate_force.png"
-set title "{1}: force packets TOP -> HSI (cf. the paper's Fig. 8)"
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $4 : 1/0) with linespoints title word(variants,i), \
+set output dir . "packet_rate_force.png"
+set title "{0}: force packets TOP -> HSI (cf. the paper's Fig. 8)\n" . spread
+plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $7 : 1/0):8:9 with yerrorlines title word(variants,i), \
      "-" using 1:2 with points pt 7 ps 1.5 lc rgb "black" title "paper, Fig. 8"
 2.5,10
 10,15
 e
-set output "{0}/distortion.png"
-set title "{1}: displayed force off by more than a JND"
+set output dir . "distortion.png"
+set title "{0}: displayed force off by more than a JND\n" . spread
 set ylabel "share of time [%]"
 set yrange [0:*]
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $5 : 1/0) with linespoints title word(variants,i)
-set output "{0}/position_error.png"
-set title "{1}: TOP position error (RMS against the HSI)"
+plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $10 : 1/0):11:12 with yerrorlines title word(variants,i)
+set output dir . "position_error.png"
+set title "{0}: TOP position error (RMS against the HSI)\n" . spread
 set ylabel "position RMSE [mrad]"
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $6 : 1/0) with linespoints title word(variants,i)
+plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $13 : 1/0):14:15 with yerrorlines title word(variants,i)
 )gp",
-                     dir.string(), scenario);
+                     scenario, seeds, kGnuplotScriptDir, seeds == 1 ? "" : "s");
 }
 
 }  // namespace
@@ -85,51 +89,54 @@ plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $6 : 1/0) with li
 int run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
   const fs::path dir(o.out_dir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", o.out_dir, ec.message()));
+  prepare_sweep_dir(o.out_dir, {"sweep.csv", "summary.csv", "plots.gp"});
 
   std::vector<Job> jobs;
   for (const auto& v : kVariants)
     for (const double p : kPValues)
       for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, p, static_cast<std::uint64_t>(s), {}});
 
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex print;
-  const bool tty = isatty(fileno(stderr));
-  auto worker = [&] {
-    for (std::size_t i = next++; i < jobs.size(); i = next++) {
-      Job& job = jobs[i];
-      SimConfig c;
-      c.scenario = o.scenario;
-      c.duration_s = o.duration_s;
-      c.seed = job.seed;
-      const bool filter = job.variant->filter;
-      c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
-                          filter ? o.filter_hz_velocity : 0.0};
-      c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
-                       filter ? o.filter_hz_force : 0.0};
-      job.result = run_simulation(c);
-      const std::size_t finished = ++done;
-      std::lock_guard lock(print);
-      if (tty || finished == jobs.size() || finished % 20 == 0)
-        fmt::print(stderr, "{}sweep: {}/{} runs ({} p={:.1f} % seed {}){}", tty ? "\r" : "", finished, jobs.size(),
-                   job.variant->name, 100 * job.p, job.seed, tty ? "   " : "\n");
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < o.jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (tty) fmt::print(stderr, "\n");
+  run_in_parallel(
+      jobs.size(), o.jobs, 20,
+      [&](std::size_t i) {
+        Job& job = jobs[i];
+        SimConfig c;
+        c.scenario = o.scenario;
+        c.duration_s = o.duration_s;
+        c.seed = job.seed;
+        const bool filter = job.variant->filter;
+        c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
+                            filter ? o.filter_hz_velocity : 0.0};
+        c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
+                         filter ? o.filter_hz_force : 0.0};
+        job.result = run_simulation(c);
+      },
+      [&](std::size_t i) {
+        return fmt::format("{} p={:.1f} % seed {}", jobs[i].variant->name, 100 * jobs[i].p, jobs[i].seed);
+      });
 
   std::string runs =
       "variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,position_rmse,"
       "force_rmse,bus_load,realtime_factor\n";
-  std::string summary =
-      "variant,p_percent,velocity_rate_percent,force_rate_percent,jnd_violation_percent,"
-      "position_rmse_mrad,force_rmse_n\n";
+  // Each metric over the seeds of a point: mean, min and max, in the plots' units.
+  struct Spread {
+    double sum = 0, min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+    void add(double x) {
+      sum += x;
+      min = std::min(min, x);
+      max = std::max(max, x);
+    }
+    std::string csv(int n, double scale, int digits) const {
+      return fmt::format(",{:.{}f},{:.{}f},{:.{}f}", scale * sum / n, digits, scale * min, digits, scale * max, digits);
+    }
+  };
+  std::string summary = "variant,p_percent,seeds";
+  for (const char* m :
+       {"velocity_rate_percent", "force_rate_percent", "jnd_violation_percent", "position_rmse_mrad", "force_rmse_n"})
+    summary += fmt::format(",{0},{0}_min,{0}_max", m);
+  summary += "\n";
   for (std::size_t i = 0; i < jobs.size(); i += static_cast<std::size_t>(o.seeds)) {
-    double v = 0, f = 0, jnd = 0, pos = 0, frms = 0;
+    Spread v, f, jnd, pos, frms;
     for (int s = 0; s < o.seeds; ++s) {
       const Job& job = jobs[i + static_cast<std::size_t>(s)];
       const SimResult& r = job.result;
@@ -137,30 +144,26 @@ int run_sweep(const SweepOptions& o) {
           fmt::format("{},{},{},{:.6f},{:.6f},{:.6f},{:.6g},{:.6g},{:.6f},{:.0f}\n", job.variant->name, job.p, job.seed,
                       r.velocity_packet_rate, r.force_packet_rate, r.force_jnd_violation, r.position_rmse_rad,
                       r.force_rmse_n, std::max(r.bus_load_hsi, r.bus_load_top), r.realtime_factor);
-      v += r.velocity_packet_rate;
-      f += r.force_packet_rate;
-      jnd += r.force_jnd_violation;
-      pos += r.position_rmse_rad;
-      frms += r.force_rmse_n;
+      v.add(r.velocity_packet_rate);
+      f.add(r.force_packet_rate);
+      jnd.add(r.force_jnd_violation);
+      pos.add(r.position_rmse_rad);
+      frms.add(r.force_rmse_n);
     }
-    const double n = o.seeds;
-    summary += fmt::format("{},{},{:.2f},{:.2f},{:.2f},{:.3f},{:.4f}\n", jobs[i].variant->name, 100 * jobs[i].p,
-                           100 * v / n, 100 * f / n, 100 * jnd / n, 1000 * pos / n, frms / n);
+    const int n = o.seeds;
+    summary += fmt::format("{},{},{}{}{}{}{}{}\n", jobs[i].variant->name, 100 * jobs[i].p, n, v.csv(n, 100, 2),
+                           f.csv(n, 100, 2), jnd.csv(n, 100, 2), pos.csv(n, 1000, 3), frms.csv(n, 1, 4));
   }
-  std::ofstream(dir / "sweep.csv") << runs;
-  std::ofstream(dir / "summary.csv") << summary;
-  std::ofstream(dir / "plots.gp") << gnuplot_script(dir, scenario_name(o.scenario));
+  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
+  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
+  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(scenario_name(o.scenario), o.seeds),
+                                 "--out");
 
-  const std::string command = fmt::format("gnuplot '{}' 2>&1", (dir / "plots.gp").string());
-  if (std::system(command.c_str()) != 0) {
-    fmt::print(stderr, "lever-hil: gnuplot failed; the CSV files are in {} (install gnuplot-nox for plots)\n",
-               dir.string());
-    return 1;
-  }
+  if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(
       "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, packet_rate_velocity.png, "
       "packet_rate_force.png, distortion.png, position_error.png\n",
-      jobs.size(), o.duration_s, o.seeds, dir.string());
+      jobs.size(), o.duration_s, o.seeds, program::printable(dir.string()));
   return 0;
 }
 

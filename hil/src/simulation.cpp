@@ -399,10 +399,26 @@ SimResult run_simulation(const SimConfig& config) {
       r.top.armed_without_rearm = r.top.armed_without_rearm || top_bad;
     }
     if (config.record_trace) {
-      result.trace.push_back({t, world.hsi().angle(), world.top().angle(), ht.velocity_rad_s, tt.position_ref_rad,
-                              contact, measured, displayed, hsi->torque(), top->torque(), hand, ht.sent_data,
-                              tt.sent_data, static_cast<int>(hl.supervisor().state()),
-                              static_cast<int>(tl.supervisor().state())});
+      const TraceRow row{t,
+                         world.hsi().angle(),
+                         world.top().angle(),
+                         ht.velocity_rad_s,
+                         tt.position_ref_rad,
+                         contact,
+                         measured,
+                         displayed,
+                         hsi->torque(),
+                         top->torque(),
+                         hand,
+                         ht.sent_data,
+                         tt.sent_data,
+                         static_cast<int>(hl.supervisor().state()),
+                         static_cast<int>(tl.supervisor().state())};
+      if (config.trace_sink) {
+        config.trace_sink(row);
+      } else {
+        result.trace.push_back(row);
+      }
     }
     if (config.observer) config.observer({t, tick, hl, tl, hsi->rearms_sent, top->rearms_sent});
   }

@@ -332,7 +332,7 @@ SphereResult run_sphere(const SphereConfig& c) {
   r.ticks = ticks;
   r.uplink_delay_ticks = up_ticks;
   r.downlink_delay_ticks = down_ticks;
-  if (c.record_trace) r.trace.reserve(ticks);
+  if (c.record_trace && !c.trace_sink) r.trace.reserve(ticks);
   std::uint64_t contact = 0, saturated = 0, violations = 0, downlink_violations = 0, zero_velocity = 0,
                 position_samples = 0;
   double contact_force_sum = 0.0, force_sq = 0.0, position_sq = 0.0, speed_sum = 0.0;
@@ -449,9 +449,15 @@ SphereResult run_sphere(const SphereConfig& c) {
       r.position_max_error_m = std::max(r.position_max_error_m, e);
       ++position_samples;
     }
-    if (c.record_trace)
-      r.trace.push_back(
-          {t, x, measured, velocity, vd.send, top_has_position, top_position, force, fd.send, displayed, reference});
+    if (c.record_trace) {
+      const SphereTraceRow row{t,     x,       measured,  velocity, vd.send, top_has_position, top_position,
+                               force, fd.send, displayed, reference};
+      if (c.trace_sink) {
+        c.trace_sink(row);
+      } else {
+        r.trace.push_back(row);
+      }
+    }
   }
 
   const double n = static_cast<double>(ticks);

@@ -14,6 +14,7 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "key.hpp"
+#include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
 #include "relay.hpp"
 #include "shown_value.hpp"
@@ -66,7 +67,7 @@ int main(int argc, char** argv) {
       "addresses, forged, tampered, replayed or sent before this bridge started are dropped and counted; an\n"
       "allow-list per direction keeps other ids off both sides. SIGINT, SIGTERM and SIGHUP flush the recording\n"
       "and exit 0."};
-  app.name("lever-bridge");
+  lever::program::describe(app, "lever-bridge");  // --version; the footer below says more
   app.footer(
       "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
       "socket, the recording, real-time scheduling); 2 bad input (an option, the configuration file, the key file,\n"
@@ -87,15 +88,16 @@ int main(int argc, char** argv) {
                  "(default: the lever protocol's ids)");
   app.add_option("--record", record, "record every frame both ways to this candump -L log file");
   app.add_flag("--stats-json", stats_json, "print a JSON line of statistics every second");
-  app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")->check(CLI::Range(0, 255));
+  app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")
+      ->check(lever::program::whole(0, 255));
   app.add_option("--peer-site-id", peer_site_id,
                  "the peer's site id, 0-255: datagrams carrying another are refused (default: any but our own)")
-      ->check(CLI::Range(0, 255));
+      ->check(lever::program::whole(0, 255));
   app.add_flag("--insecure", insecure, "no authentication (a public key): for debugging only");
   app.add_option("--realtime-priority", realtime_priority,
                  "run the relay under SCHED_FIFO at this priority (1-99) with memory locked; on a busy host "
                  "this is what keeps the latency tail short")
-      ->check(CLI::Range(1, 99));
+      ->check(lever::program::whole(1, 99));
   app.add_flag("--check-config", check_only,
                "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
                "not); opens no CAN interface and no socket");

@@ -12,8 +12,11 @@
 namespace lever::tool {
 namespace {
 
+// The output goes to the sink in chunks of about this size: memory stays bounded however long the trace.
+constexpr std::size_t kChunkBytes = 64 * 1024;
+
 template <std::size_t N>
-CodecRun run(const Trace& trace, const codec::Config<double>& config) {
+CodecRun run(const Trace& trace, const codec::Config<double>& config, const CsvSink& sink) {
   codec::DeadbandSender<double, N> sender(config);
   codec::DeadbandReceiver<double, N> receiver(config.mode);
 
@@ -43,21 +46,25 @@ CodecRun run(const Trace& trace, const codec::Config<double>& config) {
     fmt::format_to(std::back_inserter(out), "{:.17g},{:d}", t, decision.send ? 1 : 0);
     for (std::size_t d = 0; d < N; ++d) fmt::format_to(std::back_inserter(out), ",{:.17g}", x_hat[d]);
     out.push_back('\n');
+    if (out.size() > kChunkBytes) {
+      sink({out.data(), out.size()});
+      out.clear();
+    }
   }
+  sink({out.data(), out.size()});
   result.rmse = std::sqrt(squared_error_sum / static_cast<double>(result.samples));
-  result.csv = fmt::to_string(out);
   return result;
 }
 
 }  // namespace
 
-CodecRun run_codec(const Trace& trace, const codec::Config<double>& config) {
+CodecRun run_codec(const Trace& trace, const codec::Config<double>& config, const CsvSink& sink) {
   if (!codec::is_valid(config)) throw std::invalid_argument("invalid codec configuration");
   switch (trace.dof) {
     case 1:
-      return run<1>(trace, config);
+      return run<1>(trace, config, sink);
     case 3:
-      return run<3>(trace, config);
+      return run<3>(trace, config, sink);
     default:
       throw std::invalid_argument(fmt::format("unsupported DoF count {}", trace.dof));
   }

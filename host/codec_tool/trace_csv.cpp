@@ -10,7 +10,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <string_view>
+
+#include "lever/program/text.hpp"
 
 namespace lever::tool {
 namespace {
@@ -41,9 +44,11 @@ double parse_cell(std::string_view cell, const std::filesystem::path& file, std:
   errno = 0;
   const double value = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size())
-    throw TraceError(file, line_no, fmt::format("'{}' in column '{}' is not a number", cell, column));
+    throw TraceError(file, line_no,
+                     fmt::format("'{}' in column '{}' is not a number", program::printable(cell), column));
   if (!std::isfinite(value) || errno == ERANGE)
-    throw TraceError(file, line_no, fmt::format("'{}' in column '{}' is not a finite number", cell, column));
+    throw TraceError(file, line_no,
+                     fmt::format("'{}' in column '{}' is not a finite number", program::printable(cell), column));
   return value;
 }
 
@@ -56,9 +61,14 @@ TraceError::TraceError(const std::filesystem::path& file, std::size_t line, cons
       line_(line) {}
 
 Trace read_trace(const std::filesystem::path& file) {
+  if (file == "-") return read_trace(std::cin, "stdin");
   std::ifstream in(file);
   if (!in) throw TraceError(file, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  if (std::filesystem::is_directory(file)) throw TraceError(file, 0, "cannot read: it is a directory");
+  return read_trace(in, file);
+}
 
+Trace read_trace(std::istream& in, const std::filesystem::path& file) {
   Trace trace;
   std::string line;
   std::size_t line_no = 0;
@@ -66,6 +76,8 @@ Trace read_trace(const std::filesystem::path& file) {
   std::string header;
   while (std::getline(in, line)) {
     ++line_no;
+    // A UTF-8 byte order mark, as spreadsheet programs write: invisible, and no part of the header.
+    if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     if (trim(line).empty()) continue;  // blank lines carry no sample
     if (header.empty()) {
       header = line;
@@ -76,7 +88,8 @@ Trace read_trace(const std::filesystem::path& file) {
                  columns[3] == "z") {
         trace.dof = 3;
       } else {
-        throw TraceError(file, line_no, fmt::format("bad header '{}': expected 't,x' or 't,x,y,z'", trim(line)));
+        throw TraceError(file, line_no,
+                         fmt::format("bad header '{}': expected 't,x' or 't,x,y,z'", program::printable(trim(line))));
       }
       continue;
     }
@@ -85,7 +98,9 @@ Trace read_trace(const std::filesystem::path& file) {
       throw TraceError(file, line_no, fmt::format("expected {} columns, found {}", columns.size(), cells.size()));
     const double t = parse_cell(cells[0], file, line_no, "t");
     if (!trace.t.empty() && !(t > trace.t.back()))
-      throw TraceError(file, line_no, fmt::format("time {} does not increase (previous {})", cells[0], trace.t.back()));
+      throw TraceError(
+          file, line_no,
+          fmt::format("time {} does not increase (previous {})", program::printable(cells[0]), trace.t.back()));
     trace.t.push_back(t);
     for (std::size_t c = 1; c < cells.size(); ++c)
       trace.values.push_back(parse_cell(cells[c], file, line_no, columns[c]));
@@ -94,40 +109,6 @@ Trace read_trace(const std::filesystem::path& file) {
   if (header.empty()) throw TraceError(file, 0, "empty file: expected header 't,x' or 't,x,y,z'");
   if (trace.t.empty()) throw TraceError(file, 0, "no samples after the header");
   return trace;
-}
-
-void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
-  const auto dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-  // fmt rather than operator+: GCC 12 reports a false -Wrestrict on that concatenation at -O3 (bug 105651).
-  std::string temp = fmt::format("{}/.{}.XXXXXX", dir.string(), file.filename().string());
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) throw TraceError(file, 0, fmt::format("cannot write: {}", std::strerror(errno)));
-  const char* data = content.data();
-  std::size_t left = content.size();
-  int error = 0;
-  while (left > 0) {
-    const ssize_t n = ::write(fd, data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      error = errno;
-      break;
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
-  if (error == 0 && ::fsync(fd) != 0) error = errno;
-  if (::close(fd) != 0 && error == 0) error = errno;
-  // mkstemp creates 0600; a result file should be as readable as any other the user writes.
-  if (error == 0) {
-    const mode_t mask = ::umask(0);
-    ::umask(mask);
-    if (::chmod(temp.c_str(), 0666 & ~mask) != 0) error = errno;
-  }
-  if (error == 0 && std::rename(temp.c_str(), file.c_str()) != 0) error = errno;
-  if (error != 0) {
-    ::unlink(temp.c_str());
-    throw TraceError(file, 0, fmt::format("cannot write: {}", std::strerror(error)));
-  }
 }
 
 }  // namespace lever::tool

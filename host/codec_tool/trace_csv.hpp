@@ -2,6 +2,7 @@
 // Trace files for lever-codec: `t,x` (1-DoF) or `t,x,y,z` (3-DoF) in, `t,sent,x_hat[,y_hat,z_hat]` out.
 #include <cstddef>
 #include <filesystem>
+#include <iosfwd>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -29,11 +30,9 @@ struct Trace {
   const double* row(std::size_t i) const noexcept { return values.data() + i * dof; }
 };
 
-// Reads and validates a whole trace; throws TraceError naming file, line and problem.
+// Reads and validates a whole trace ("-": stdin); throws TraceError naming file, line and problem. A UTF-8
+// byte order mark before the header is skipped.
 Trace read_trace(const std::filesystem::path& file);
-
-// Writes a file so that readers never see it half-written: into a temporary beside it, then renamed.
-// On any failure the temporary is removed and TraceError thrown.
-void write_file_atomically(const std::filesystem::path& file, const std::string& content);
+Trace read_trace(std::istream& in, const std::filesystem::path& name);
 
 }  // namespace lever::tool

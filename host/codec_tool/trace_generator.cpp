@@ -184,6 +184,12 @@ Trace generate_trace(const GeneratorOptions& options) {
 }
 
 std::string format_trace_csv(const Trace& trace) {
+  std::string all;
+  write_trace_csv(trace, [&all](std::string_view chunk) { all += chunk; });
+  return all;
+}
+
+void write_trace_csv(const Trace& trace, const std::function<void(std::string_view)>& sink) {
   fmt::memory_buffer out;
   const std::string_view header = trace.dof == 1 ? "t,x\n" : "t,x,y,z\n";
   out.append(header.data(), header.data() + header.size());
@@ -191,8 +197,12 @@ std::string format_trace_csv(const Trace& trace) {
     fmt::format_to(std::back_inserter(out), "{}", trace.t[i]);
     for (std::size_t d = 0; d < trace.dof; ++d) fmt::format_to(std::back_inserter(out), ",{}", trace.row(i)[d]);
     out.push_back('\n');
+    if (out.size() > 64 * 1024) {
+      sink({out.data(), out.size()});
+      out.clear();
+    }
   }
-  return fmt::to_string(out);
+  sink({out.data(), out.size()});
 }
 
 }  // namespace lever::tool

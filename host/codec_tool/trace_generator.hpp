@@ -1,7 +1,9 @@
 #pragma once
 // Example traces from simple physics, for the demo, the README's rate table and tests.
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <string_view>
 
 #include "trace_csv.hpp"
 
@@ -23,5 +25,7 @@ Trace generate_trace(const GeneratorOptions& options);
 
 // CSV text of a trace, values in shortest round-trip form.
 std::string format_trace_csv(const Trace& trace);
+// The same, a chunk at a time, so a long trace's text is never held whole.
+void write_trace_csv(const Trace& trace, const std::function<void(std::string_view)>& sink);
 
 }  // namespace lever::tool

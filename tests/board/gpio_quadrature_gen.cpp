@@ -2,6 +2,7 @@
 // its lines' sysfs `pull` files, so that a real libgpiod consumer sees real kernel edge events. Runs the steps
 // given, in order, then writes a JSON summary (what was generated, where the lines ended).
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <cerrno>

@@ -39,7 +39,7 @@ expect_bad "zero cut-off" "--filter-hz" --filter-hz 0 --in "$work/good.csv" --ou
 expect_bad "negative cut-off" "--filter-hz" --filter-hz -3 --in "$work/good.csv" --out "$work/out.csv"
 expect_bad "unknown mode" "--mode" --mode zigzag --in "$work/good.csv" --out "$work/out.csv"
 expect_bad "no input" "--in and --out are required" --p 0.1
-expect_bad "unwritable output" "cannot write" --in "$work/good.csv" --out "$work/no/such/dir/out.csv"
+expect_bad "unwritable output" "the directory $work/no/such/dir does not exist" --in "$work/good.csv" --out "$work/no/such/dir/out.csv"
 
 "$codec" --help >"$work/help" 2>&1
 check "--help exits 0" test $? -eq 0

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include "lever/program/exit_codes.hpp"
+#include "lever/program/output_file.hpp"
 #include "trace_csv.hpp"
 
 namespace fs = std::filesystem;
@@ -83,11 +85,12 @@ TEST_CASE("a missing file is named", "[tool][csv]") {
 TEST_CASE("an atomic write leaves either the whole file or nothing", "[tool][csv]") {
   TempDir dir;
   const auto file = dir.path() / "out.csv";
-  lever::tool::write_file_atomically(file, "t,sent,x_hat\n0,1,1\n");
+  lever::program::OutputFile::write_all(file.string(), "t,sent,x_hat\n0,1,1\n");
   std::ifstream in(file);
   std::string content((std::istreambuf_iterator<char>(in)), {});
   CHECK(content == "t,sent,x_hat\n0,1,1\n");
-  CHECK_THROWS_AS(lever::tool::write_file_atomically(dir.path() / "missing" / "out.csv", "x"), TraceError);
+  CHECK_THROWS_AS(lever::program::OutputFile::write_all((dir.path() / "missing" / "out.csv").string(), "x"),
+                  lever::program::BadInput);
   int entries = 0;
   for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++entries;
   CHECK(entries == 1);  // no temporary left behind

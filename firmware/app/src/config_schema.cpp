@@ -8,6 +8,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "lever/program/numbers.hpp"
+#include "lever/program/text.hpp"
+
 namespace lever::app {
 namespace {
 
@@ -55,19 +58,7 @@ void ConfigSchema::add(Field f) {
   fields_.push_back(std::move(f));
 }
 
-std::string ConfigSchema::printable(std::string_view s) {
-  // A config value echoed into a one-line message: control bytes escaped, and never a whole file of it.
-  std::string out;
-  for (const char c : s.substr(0, 80)) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-      out += fmt::format("\\x{:02x}", static_cast<unsigned char>(c));
-    } else {
-      out += c;
-    }
-  }
-  if (s.size() > 80) out += "...";
-  return out;
-}
+std::string ConfigSchema::printable(std::string_view s) { return program::printable(s); }
 
 std::optional<std::string> ConfigSchema::read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
                                                       std::int64_t& out) {
@@ -104,10 +95,9 @@ void ConfigSchema::number(std::string key, double& value, double lo, double hi, 
          } else {
            return "must be a number, got " + type_name(n);
          }
-         const auto range =
-             fmt::format("a number in [{}, {}]{}", number_text(lo), number_text(hi), unit.empty() ? "" : " " + unit);
-         if (!std::isfinite(v)) return fmt::format("must be {}, got {}", range, v);
-         if (v < lo || v > hi) return fmt::format("must be {}, got {}", range, number_text(v));
+         // The same check, and the same words, as the programs' numeric options.
+         const std::string what = unit.empty() ? "a number" : "a number of " + unit;
+         if (auto e = program::check_number(v, {lo, hi, false, false, what})) return e;
          value = v;
          return std::nullopt;
        },

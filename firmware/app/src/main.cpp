@@ -14,15 +14,16 @@
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
-#include "lever/program/parse.hpp"
 #include "lever/hil/simulation.hpp"
+#include "lever/program/choices.hpp"
+#include "lever/program/numbers.hpp"
+#include "lever/program/parse.hpp"
 
 namespace {
 
 using namespace lever;
 
 constexpr int kBadInput = program::kBadInput;
-constexpr const char* kVersion = "lever-fw 0.1.0";
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop.store(true); }
@@ -72,26 +73,29 @@ int run_sim(const app::FwConfig& config, double duration_s, bool stats_json, boo
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "lever-fw: the firmware of one lever of the haptic teleoperation testbed (HSI or TOP). Exit codes: "
-      "0 success, 1 runtime failure, 2 bad input (command line or configuration)."};
-  app.name("lever-fw");
-  std::string config_path, role, can;
+  CLI::App app{"lever-fw: the firmware of one lever of the haptic teleoperation testbed (HSI or TOP)."};
+  program::describe(app, "lever-fw");
+  std::string config_path, can;
+  std::optional<protocol::Role> role;
   bool check_config = false, stats_json = false, sim = false, fast = false, motor_off = false;
   double duration_s = 10.0;
-  app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")->required();
-  app.add_option("--role", role, "override lever.role: hsi or top")->check(CLI::IsMember({"hsi", "top"}));
+  app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")
+      ->required()
+      ->check(program::path());
+  app.add_option("--role", role, "override lever.role: hsi or top")
+      ->transform(program::one_of(
+          program::Choices<protocol::Role>{{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}}));
   app.add_option("--can", can, "override board.can.interface");
   app.add_flag("--check-config", check_config, "validate the configuration and print it, touching no hardware");
   app.add_flag("--stats-json", stats_json, "one JSON status object per line, once a second");
   app.add_flag("--sim", sim, "run against the in-process HIL instead of the board's hardware");
-  app.add_option("--duration", duration_s, "with --sim: simulated seconds")->check(CLI::Range(0.1, 86400.0));
+  app.add_option("--duration", duration_s, "with --sim: simulated seconds")
+      ->check(program::number({0.1, 86400.0, false, false, "a duration in seconds"}));
   app.add_flag("--fast", fast, "with --sim: as fast as the machine goes, not paced to the wall clock");
   app.add_flag("--motor-off", motor_off,
                "stop the board's motor (PWM disabled at duty 0, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
       ->excludes("--sim", "--check-config");
-  app.set_version_flag("--version", kVersion);
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
   auto loaded = app::load_fw_config(config_path);
@@ -100,7 +104,7 @@ int main(int argc, char** argv) {
     return kBadInput;
   }
   auto& config = loaded.config;
-  if (!role.empty()) config.lever.role = role == "hsi" ? protocol::Role::hsi : protocol::Role::top;
+  if (role) config.lever.role = *role;
   if (!can.empty()) config.board.can_interface = can;
   if (check_config) {
     fmt::print("# lever-fw: {} is valid; the effective configuration:\n{}", config_path,

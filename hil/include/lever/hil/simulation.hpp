@@ -36,6 +36,8 @@ struct SimView {
   std::uint64_t top_rearms_sent = 0;
 };
 
+struct TraceRow;
+
 // Where the levers are: both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
 // over an IP link (the network parameters apply only there).
 enum class Topology { one_site, two_sites };
@@ -67,6 +69,8 @@ struct SimConfig {
   double jnd = 0.10;                 // force_jnd_violation: relative threshold (Weber fraction)...
   double jnd_absolute_n = 0.05;      // ...but never below the absolute detection threshold for force
   bool record_trace = false;
+  // With record_trace: each tick's row goes here as it is made (bounded memory), not into SimResult::trace.
+  std::function<void(const TraceRow&)> trace_sink;
   std::function<void(const SimView&)> observer;  // called after every tick
 
   static fw::LeverConfig default_firmware(protocol::Role role);

@@ -5,6 +5,7 @@
 // PCs did. Deterministic: the same configuration and seed give the same run, bit for bit.
 // docs/hil-model.md ("sphere-3dof") gives every parameter's reason.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "lever/codec/config.hpp"
@@ -48,6 +49,20 @@ struct SphereParams {
   double stiffness = 1000.0;  // N/m, u of eq. (11): about the Omni's stiffest axis-wise bound (Z, 1.02 N/mm)
 };
 
+struct SphereTraceRow {
+  double t = 0.0;
+  Vec3 position{};  // the device's tip (true)
+  Vec3 measured{};  // quantized to the device's resolution
+  Vec3 velocity{};  // backward difference of measured, the value offered to the codec
+  bool velocity_sent = false;
+  bool top_has_position = false;
+  Vec3 top_position{};       // the TOP's extrapolated user position
+  Vec3 environment_force{};  // eq. (11) at top_position
+  bool force_sent = false;
+  Vec3 displayed_force{};  // what the device displays (reconstructed, saturated)
+  Vec3 reference_force{};  // the force the undistorted system (p = 0, lossless) would display now
+};
+
 struct SphereConfig {
   double duration_s = 30.0;  // the paper's interval length in IV-B
   std::uint64_t seed = 1;
@@ -62,6 +77,8 @@ struct SphereConfig {
   double jnd_absolute_n = 0.05;  // its absolute floor, as the 1-DoF metric
   int substeps = 10;             // physics steps per 1 ms tick
   bool record_trace = false;
+  // With record_trace: each tick's row goes here as it is made (bounded memory), not into SphereResult::trace.
+  std::function<void(const SphereTraceRow&)> trace_sink;
 };
 
 // The paper's variants: a deadband on one direction at a time, the other sending every change (p = 0, which
@@ -71,20 +88,6 @@ enum class SphereDirection : std::uint8_t { velocity, force };
 inline constexpr double kSphereVelocityFilterHz = 10.0;
 inline constexpr double kSphereForceFilterHz = 30.0;
 SphereConfig sphere_variant(SphereDirection direction, codec::Mode mode, bool filter, double p);
-
-struct SphereTraceRow {
-  double t = 0.0;
-  Vec3 position{};  // the device's tip (true)
-  Vec3 measured{};  // quantized to the device's resolution
-  Vec3 velocity{};  // backward difference of measured, the value offered to the codec
-  bool velocity_sent = false;
-  bool top_has_position = false;
-  Vec3 top_position{};       // the TOP's extrapolated user position
-  Vec3 environment_force{};  // eq. (11) at top_position
-  bool force_sent = false;
-  Vec3 displayed_force{};  // what the device displays (reconstructed, saturated)
-  Vec3 reference_force{};  // the force the undistorted system (p = 0, lossless) would display now
-};
 
 struct SphereResult {
   std::uint64_t ticks = 0;

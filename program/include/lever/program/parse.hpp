@@ -1,32 +1,26 @@
 #pragma once
-// Command-line parsing shared by lever-codec, lever-hil and lever-bridge: help on stdout with exit 0, any other
-// problem as one line on stderr with exit 2, the same for every program.
-#include <fmt/format.h>
-
+// Command-line parsing shared by every program: help on stdout with exit 0, any other problem as one line on
+// stderr with exit 2, the exit codes in every --help and --version everywhere.
 #include <CLI/CLI.hpp>
 #include <optional>
+#include <string>
+
+#include "lever/program/exit_codes.hpp"
 
 namespace lever::program {
 
-inline constexpr int kBadInput = 2;
+// The testbed's version, from CMake's project().
+std::string version();
 
-// Returns the exit code when the program should stop now (0 after help, kBadInput after an error); nullopt when
-// it should go on.
-inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
-  try {
-    app.parse(argc, argv);
-    return std::nullopt;
-  } catch (const CLI::CallForAllHelp&) {
-    fmt::print("{}", app.help("", CLI::AppFormatMode::All));
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) {  // --help, of the program or of a subcommand (help() picks the selected one)
-      fmt::print("{}", app.help());
-      return 0;
-    }
-    fmt::print(stderr, "{}: {}\n", app.get_name(), e.what());
-    return kBadInput;
-  }
-}
+// Names the program, adds --version and puts the exit codes at the foot of its --help (and its subcommands').
+void describe(CLI::App& app, const std::string& name);
+
+// A file or directory name: refuses the empty string, which would otherwise mean "no file" in silence.
+CLI::Validator path();
+
+// Returns the exit code when the program should stop now (0 after help or --version, kBadInput after an
+// error); nullopt when it should go on. A first argument that is no option and no subcommand is reported as
+// a misspelt subcommand, naming the ones there are.
+std::optional<int> parse(CLI::App& app, int argc, char** argv);
 
 }  // namespace lever::program
