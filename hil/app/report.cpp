@@ -27,18 +27,6 @@ nlohmann::json reaction_json(const FaultReport::LeverReaction& r, double injecte
   return j;
 }
 
-std::string passivity_name(fw::PassivityMode mode) {
-  switch (mode) {
-    case fw::PassivityMode::off:
-      return "off";
-    case fw::PassivityMode::observe:
-      return "observe";
-    case fw::PassivityMode::tdpa:
-      return "tdpa";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::string scenario_name(ScenarioKind kind) {
@@ -124,7 +112,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"jitter_ms", config.network.jitter_ms},
         {"loss", config.network.loss},
         {"comms_timeout_ms", config.top_firmware.comms_timeout},
-        {"passivity", passivity_name(config.top_firmware.passivity.mode)},
+        {"passivity", fw::name(config.top_firmware.passivity.mode)},
         {"homing", config.homing},
         {"jnd", config.jnd},
         {"jnd_absolute_n", config.jnd_absolute_n},

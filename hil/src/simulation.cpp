@@ -15,6 +15,16 @@
 namespace lever::hil {
 namespace {
 
+// A lever's dissipated energy over the run, from its telemetry's count since it last armed.
+struct RunningTotal {
+  double last_j = 0.0;
+  double total_j = 0.0;
+  void add(double since_armed_j) {
+    total_j += since_armed_j >= last_j ? since_armed_j - last_j : since_armed_j;  // below the last: it re-armed
+    last_j = since_armed_j;
+  }
+};
+
 constexpr Nanos kTick = 1'000'000;
 constexpr fw::Tick kHostPeriod = 100;       // the host looks at the levers every 100 ms
 constexpr fw::Tick kPowerUpLimit = 30'000;  // homing and arming must be done by then
@@ -245,6 +255,7 @@ SimResult run_simulation(const SimConfig& config) {
   result.prefilter_delay_ms =
       config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0;
   // The TOP's measurements of the last nominal delay's ticks, for the distortion without the transport delay.
+  RunningTotal dissipated[2];  // HSI, TOP
   std::vector<std::optional<double>> measured_history(static_cast<std::size_t>(result.nominal_delay_ticks) + 1);
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
   fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
@@ -373,6 +384,9 @@ SimResult run_simulation(const SimConfig& config) {
       return measured_history[static_cast<std::size_t>(k) % measured_history.size()];
     };
     slot(tick) = both_armed ? tt.force_n : std::nullopt;
+    // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
+    dissipated[0].add(ht.dissipated_energy_j);
+    dissipated[1].add(tt.dissipated_energy_j);
     if (both_armed) {
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
       result.hsi_min_observed_energy_j = std::min(result.hsi_min_observed_energy_j, ht.observed_energy_j);
@@ -431,8 +445,8 @@ SimResult run_simulation(const SimConfig& config) {
   result.network_sent = to_top.stats().sent + to_hsi.stats().sent;
   result.network_lost = to_top.stats().lost + to_hsi.stats().lost;
   result.network_reordered = to_top.stats().reordered + to_hsi.stats().reordered;
-  result.hsi_dissipated_energy_j = hl.telemetry().dissipated_energy_j;
-  result.top_dissipated_energy_j = tl.telemetry().dissipated_energy_j;
+  result.hsi_dissipated_energy_j = dissipated[0].total_j;
+  result.top_dissipated_energy_j = dissipated[1].total_j;
   result.energy_frames = hl.counters().energy_sent + tl.counters().energy_sent;
   result.hsi_seq_gaps = hl.role().receiver().sequence().missing();
   result.top_seq_gaps = tl.role().receiver().sequence().missing();

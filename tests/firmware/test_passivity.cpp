@@ -81,3 +81,19 @@ TEST_CASE("tdpa never puts out more energy than the peer put in; observe only wa
   CHECK_FALSE(tdpa.frame(101, false));  // nothing new
   CHECK(tdpa.frame(102, true));         // but a refresh carries it again
 }
+
+TEST_CASE("tdpa lets out exactly the energy left, not more, on the tick the budget runs out", "[passivity]") {
+  PassivityPort port({PassivityMode::tdpa, 5.0});
+  port.on_armed();
+  port.receive(joules(0.0));
+  port.receive(joules(0.003));          // 3 mJ
+  CHECK(port.limit(2.0, 1e-3) == 1.0);  // 2 mJ of 3
+  // 2 mJ asked, 1 mJ left: half of the output goes out.
+  CHECK(port.limit(2.0, 1e-3) == Approx(0.5).margin(1e-9));
+  CHECK(port.state().observed_j == Approx(0.0).margin(1e-12));
+  CHECK(port.state().dissipated_j == Approx(0.001).margin(1e-9));
+  CHECK(port.limit(2.0, 1e-3) == 0.0);  // nothing left
+  // Energy this side puts in is not the budget: only the peer's counts.
+  port.limit(-5.0, 1e-3);
+  CHECK(port.limit(2.0, 1e-3) == 0.0);
+}

@@ -109,7 +109,7 @@ struct SimResult {
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
   double contact_onsets_per_s = 0.0;  // the TOP's wall contact beginning, per armed second (RunMetrics)
-  // Passivity (zero while off): what each lever's controller dissipated since it last armed, the lowest
+  // Passivity (zero while off): what each lever's controller dissipated over the run (re-arms included), the lowest
   // observed energy seen while both were armed, and the energy frames both sent.
   double hsi_dissipated_energy_j = 0.0, top_dissipated_energy_j = 0.0;
   double hsi_min_observed_energy_j = 0.0, top_min_observed_energy_j = 0.0;

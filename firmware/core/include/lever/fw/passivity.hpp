@@ -18,6 +18,10 @@ namespace lever::fw {
 // energy frames but never acts (to measure what the channel does); tdpa also acts.
 enum class PassivityMode : std::uint8_t { off, observe, tdpa };
 
+constexpr const char* name(PassivityMode m) noexcept {
+  return m == PassivityMode::tdpa ? "tdpa" : m == PassivityMode::observe ? "observe" : "off";
+}
+
 struct PassivityConfig {
   PassivityMode mode = PassivityMode::off;
   // TOP: the rate (1/s) at which the passive reference is pulled toward the HSI's position that rides on every
