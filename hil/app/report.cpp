@@ -55,6 +55,13 @@ std::string trace_csv_row(const TraceRow& r) {
                      r.hsi_state, r.top_state);
 }
 
+nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
+  nlohmann::json names = nlohmann::json::array();
+  for (const auto fault : protocol::kAllFaults)
+    if (protocol::has(f.bits, fault)) names.push_back(std::string(protocol::name(fault)));
+  return {{"count", f.count}, {"faults", names}};
+}
+
 nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : r.faults) {
@@ -104,6 +111,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"overruns", {{"hsi", r.hsi_overruns}, {"top", r.top_overruns}}},
       {"encoder_edges_lost", {{"hsi", r.hsi_edges_lost}, {"top", r.top_edges_lost}}},
       {"faults", faults},
+      {"lever_faults",
+       {{"hsi", lever_faults_json(r.hsi_lever_faults)}, {"top", lever_faults_json(r.top_lever_faults)}}},
       {"parameters",
        {{"velocity", codec_json(config.velocity_codec)},
         {"force", codec_json(config.force_codec)},

@@ -255,7 +255,8 @@ SimResult run_simulation(const SimConfig& config) {
   result.prefilter_delay_ms =
       config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0;
   // The TOP's measurements of the last nominal delay's ticks, for the distortion without the transport delay.
-  RunningTotal dissipated[2];  // HSI, TOP
+  RunningTotal dissipated[2];        // HSI, TOP
+  bool was_armed[2] = {true, true};  // the scenario starts with both armed
   std::vector<std::optional<double>> measured_history(static_cast<std::size_t>(result.nominal_delay_ticks) + 1);
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
   fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
@@ -385,8 +386,21 @@ SimResult run_simulation(const SimConfig& config) {
     };
     slot(tick) = both_armed ? tt.force_n : std::nullopt;
     // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
-    dissipated[0].add(ht.dissipated_energy_j);
-    dissipated[1].add(tt.dissipated_energy_j);
+    // Every fault a lever latched while the scenario ran, injected or not: a delayed loop that trips a
+    // lever's own protection (TORQUE_LIMIT, POSITION_LIMIT) has not survived the delay, whatever else it did.
+    for (int i = 0; i < 2; ++i) {
+      const auto& supervisor = i == 0 ? hl.supervisor() : tl.supervisor();
+      const bool armed = supervisor.armed();
+      auto& lever_faults = i == 0 ? result.hsi_lever_faults : result.top_lever_faults;
+      if (was_armed[i] && !armed && supervisor.state() == fw::LeverState::fault) {
+        ++lever_faults.count;
+        lever_faults.bits |= supervisor.latched();
+      }
+      was_armed[i] = armed;
+    }
+    // (From the ports themselves: the telemetry holds it only on the ticks the controllers run.)
+    dissipated[0].add(hl.role().passivity().state().dissipated_j);
+    dissipated[1].add(tl.role().passivity().state().dissipated_j);
     if (both_armed) {
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
       result.hsi_min_observed_energy_j = std::min(result.hsi_min_observed_energy_j, ht.observed_energy_j);

@@ -6,7 +6,9 @@
 // - energy: after the controller acts, each port's observed energy is at least -1 uJ (one count of the energy
 //   field) at every armed tick; without tdpa, below -10 mJ somewhere (a tenth of the ~0.1 J a tap puts through
 //   a port);
-// - torque: never above the torque limit (1 N m), either lever, every tick;
+// - protection: no lever trips its own protection (TORQUE_LIMIT: the demand above the 1 N m limit for 250 ms;
+//   POSITION_LIMIT) while the scenario runs. The torque sent to the motor never exceeds the limit by
+//   construction (the clamp), so the bound is on what the controllers demand;
 // - position: once neither lever has felt a contact force for 1 s (five of the TOP's 200 ms drift time
 //   constants), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay earlier;
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
@@ -23,7 +25,8 @@ namespace {
 
 struct Outcome {
   double min_observed_j[2] = {0.0, 0.0};  // HSI, TOP
-  double max_torque_nm = 0.0;
+  double max_torque_nm = 0.0;             // sent to the motors
+  std::uint32_t lever_faults = 0;
   double onsets_per_s = 0.0;
   double max_drift_rad = 0.0;  // after the transient (above)
   std::size_t drift_ticks = 0;
@@ -55,6 +58,7 @@ Outcome run(double delay_ms, fw::PassivityMode mode) {
   };
   const auto r = run_simulation(c);
   o.onsets_per_s = r.contact_onsets_per_s;
+  o.lever_faults = r.hsi_lever_faults.count + r.top_lever_faults.count;
   const auto lag = static_cast<std::size_t>(r.nominal_delay_ticks);
   std::size_t quiet = 0;
   for (std::size_t k = 0; k < r.trace.size(); ++k) {
@@ -70,7 +74,7 @@ Outcome run(double delay_ms, fw::PassivityMode mode) {
 
 }  // namespace
 
-TEST_CASE("tdpa keeps each port passive and the torque within its limit under delay", "[hil][passivity]") {
+TEST_CASE("tdpa keeps each port passive under delay; without it the channel makes energy", "[hil][passivity]") {
   const double limit = fw::LeverConfig{}.torque_limit_nm;
   for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
     CAPTURE(delay_ms);
@@ -83,8 +87,29 @@ TEST_CASE("tdpa keeps each port passive and the torque within its limit under de
     }
     // What tdpa buys: without it the channel puts out energy nobody put in.
     CHECK(std::min(without.min_observed_j[0], without.min_observed_j[1]) < -0.010);
+    // The clamp, whatever the controllers demand.
     CHECK(with.max_torque_nm <= limit);
     CHECK(without.max_torque_nm <= limit);
+  }
+}
+
+// Not met (issue 14): with tdpa the TOP's reference falls behind the HSI's (the drift pull gets energy only from
+// the HSI's input, a round trip late) and pushes into the wall past the torque limit once the energy comes; the
+// HSI's displayed force is cut while the operator pulls back, and the hand pushes through. Measured (seed 3,
+// trips of both levers in 20 s): with tdpa 7, 21, 14, 18 at 10, 25, 50, 100 ms; without (observe) 27, 23, 55
+// at 25, 50, 100 ms. Catch's shouldfail: this fails once it is met.
+TEST_CASE("no lever trips its protection under delay with tdpa", "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    CHECK(run(delay_ms, fw::PassivityMode::tdpa).lever_faults == 0);
+  }
+}
+
+TEST_CASE("the baseline: without tdpa a lever trips its protection from 25 ms of delay on", "[hil][passivity]") {
+  CHECK(run(0.0, fw::PassivityMode::off).lever_faults == 0);
+  for (const double delay_ms : {25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    CHECK(run(delay_ms, fw::PassivityMode::observe).lever_faults > 0);
   }
 }
 

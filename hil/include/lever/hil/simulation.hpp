@@ -114,6 +114,11 @@ struct SimResult {
   double hsi_dissipated_energy_j = 0.0, top_dissipated_energy_j = 0.0;
   double hsi_min_observed_energy_j = 0.0, top_min_observed_energy_j = 0.0;
   std::uint64_t energy_frames = 0;
+  // The levers' own protection tripping while the scenario ran (armed -> fault), injected faults included.
+  struct LeverFaults {
+    std::uint32_t count = 0;
+    protocol::FaultBits bits = 0;  // every fault latched at those transitions
+  } hsi_lever_faults, top_lever_faults;
   double bus_load_hsi = 0.0, bus_load_top = 0.0;
   std::uint64_t armed_ticks = 0;
   std::uint64_t motion_frames = 0, force_frames = 0;
