@@ -43,6 +43,7 @@ const program::Choices<lever::fw::PassivityMode> kPassivity{{"off", lever::fw::P
 const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 // Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
+constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
 constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
 constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
@@ -58,6 +59,7 @@ struct RunOptions {
   double comms_timeout_ms = static_cast<double>(lever::fw::LeverConfig{}.comms_timeout);
   bool no_homing = false;
   lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
+  double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -150,6 +152,10 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
       ->transform(program::one_of(kPassivity))
       ->default_str("off");
+  cmd.add_option("--passivity-reserve-j", o.passivity_reserve_j,
+                 "of each port's own input energy, what it keeps for its own output (0: the literature's TDPA)")
+      ->check(program::number(kReserveJoules))
+      ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.reserve_j));
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
                "random angle, homed against the end stop before the scenario)");
@@ -195,6 +201,8 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.passivity.mode = o.passivity;
   c.top_firmware.passivity.mode = o.passivity;
+  c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
   for (const auto& f : o.faults) {
     c.faults.push_back(parse_fault_spec(f));
     if (c.faults.back().start_s >= c.duration_s)

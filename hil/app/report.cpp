@@ -122,6 +122,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"loss", config.network.loss},
         {"comms_timeout_ms", config.top_firmware.comms_timeout},
         {"passivity", fw::name(config.top_firmware.passivity.mode)},
+        {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
         {"homing", config.homing},
         {"jnd", config.jnd},
         {"jnd_absolute_n", config.jnd_absolute_n},

@@ -115,8 +115,8 @@ struct ForceMessage {
 };
 
 // Either lever -> its peer, in the tick of a data frame (the passivity observer, firmware.md): the input energy
-// of the sender's port since it armed, cumulative and never decreasing, so the receiver can take the newest as
-// the largest and drop older ones whatever order they come in.
+// the sender's port passed on since it armed (all of it unless the port keeps a reserve), cumulative and never
+// decreasing, so the receiver can take the newest as the largest and drop older ones whatever order they come in.
 struct EnergyMessage {
   std::uint32_t energy = 0;  // kEnergyLsbJ, modulo 2^32: the receiver adds the modular difference (below 2^31)
   std::uint16_t tick = 0;    // sender's 1 ms tick, modulo 2^16

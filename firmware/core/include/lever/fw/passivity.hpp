@@ -29,10 +29,15 @@ struct PassivityConfig {
   // contact (about 100-150 ms in wall-tap) so the correction does not itself drive the wall, and fast enough
   // to close a free-motion gap within a second.
   double drift_gain_per_s = 5.0;
+  // Of its own input energy, the port keeps up to this much for its own output instead of passing it to the
+  // peer (docs/firmware.md, "Local reserve"). 0 is the per-port TDPA of the literature: every joule that comes
+  // in goes to the peer, and a port puts out only what the peer passed.
+  double reserve_j = 0.0;
 };
 
 constexpr bool is_valid(const PassivityConfig& c) noexcept {
-  return c.mode <= PassivityMode::tdpa && c.drift_gain_per_s >= 0.0 && c.drift_gain_per_s < 1000.0;
+  return c.mode <= PassivityMode::tdpa && c.drift_gain_per_s >= 0.0 && c.drift_gain_per_s < 1000.0 &&
+         c.reserve_j >= 0.0 && c.reserve_j < 1000.0;
 }
 
 // The peer's input energy as received: only ever grows within an epoch (protocol/messages.hpp, EnergyMessage).
@@ -72,10 +77,14 @@ class PassivityPort {
   struct State {
     double input_j = 0.0;       // into the channel through this port, since arming
     double output_j = 0.0;      // out of the channel through this port, after the controller
-    double received_j = 0.0;    // the peer port's input energy, as received
+    double received_j = 0.0;    // what the peer port passed to this one, as received
+    double passed_j = 0.0;      // of input_j, what this port passed to the peer (all of it but the reserve)
     double dissipated_j = 0.0;  // what the controller took out
-    double observed_j = 0.0;    // received - output: the channel's energy as this port can know it
-    double scale = 1.0;         // this tick's factor on the port's output
+    // received + input - passed - output: the energy this port may still put out. Kept at or above zero by
+    // tdpa at both ports, the channel's own energy (both inputs less both outputs) is too: each port puts out
+    // or passes on only what came in through it or from the peer, and the peer passed only what it had.
+    double observed_j = 0.0;
+    double scale = 1.0;  // this tick's factor on the port's output
   };
 
   constexpr PassivityPort() noexcept : PassivityPort(PassivityConfig{}) {}
@@ -100,7 +109,7 @@ class PassivityPort {
       state_.output_j = 0.0;
     }
     state_.received_j = received_.energy_j();
-    state_.observed_j = state_.received_j - state_.output_j;
+    settle();
   }
 
   // out_w: the power this tick's output would carry out of the channel into this lever's side (negative: the
@@ -113,7 +122,7 @@ class PassivityPort {
     if (requested <= 0.0) {
       state_.input_j -= requested;
     } else {
-      const double budget = state_.received_j - state_.output_j;
+      const double budget = available();
       if (config_.mode == PassivityMode::tdpa && requested > budget) {
         const double allowed = budget > 0.0 ? budget : 0.0;
         state_.scale = allowed / requested;
@@ -123,7 +132,7 @@ class PassivityPort {
         state_.output_j += requested;
       }
     }
-    state_.observed_j = state_.received_j - state_.output_j;
+    settle();
     return state_.scale;
   }
 
@@ -131,7 +140,7 @@ class PassivityPort {
   constexpr std::optional<protocol::EnergyMessage> frame(Tick now, bool refresh) noexcept {
     if (!enabled()) return std::nullopt;
     // Rounded down, so the peer never credits more than came in; modulo 2^32 by the wrap rule.
-    const double units = state_.input_j / protocol::kEnergyLsbJ;
+    const double units = state_.passed_j / protocol::kEnergyLsbJ;
     const auto code = static_cast<std::uint32_t>(static_cast<std::uint64_t>(units) & 0xFFFFFFFFu);
     if (sent_any_ && code == sent_code_ && !refresh) return std::nullopt;
     sent_any_ = true;
@@ -140,6 +149,19 @@ class PassivityPort {
   }
 
  private:
+  constexpr double available() const noexcept {
+    return state_.received_j + state_.input_j - state_.passed_j - state_.output_j;
+  }
+  // Passes the input beyond the reserve on, but never energy this port has already put out: what it passes
+  // only grows, and never takes `available` below zero.
+  constexpr void settle() noexcept {
+    const double beyond_reserve = state_.input_j - config_.reserve_j;
+    const double unspent = state_.passed_j + available();
+    const double target = beyond_reserve < unspent ? beyond_reserve : unspent;
+    if (target > state_.passed_j) state_.passed_j = target;
+    state_.observed_j = available();
+  }
+
   PassivityConfig config_;
   State state_;
   ReceivedEnergy received_;
