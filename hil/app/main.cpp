@@ -2,6 +2,7 @@
 // physical world on the wall clock to real lever-fw processes.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "delay_sweep.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/output_file.hpp"
@@ -37,6 +39,8 @@ const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_
 const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 const program::Choices<lever::fw::MotionVelocity> kMotionVelocities{
     {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
+const program::Choices<lever::hil::SweepAxis> kSweepAxes{{"p", lever::hil::SweepAxis::p},
+                                                         {"delay", lever::hil::SweepAxis::delay}};
 const program::Choices<lever::fw::PassivityMode> kPassivity{{"off", lever::fw::PassivityMode::off},
                                                             {"observe", lever::fw::PassivityMode::observe},
                                                             {"tdpa", lever::fw::PassivityMode::tdpa}};
@@ -274,7 +278,20 @@ int main(int argc, char** argv) {
   add_run_options(*run, run_options);
 
   SweepOptions sweep_options;
-  auto* sweep = app.add_subcommand("sweep", "sweep p for each mode and seed; CSV and gnuplot PNG plots");
+  auto* sweep = app.add_subcommand(
+      "sweep", "sweep p for each mode, or the network delay with and without passivity; CSV and gnuplot PNG plots");
+  sweep->add_option("--over", sweep_options.over, "what to sweep: p (the paper's figures) or delay (wall-tap only)")
+      ->transform(program::one_of(kSweepAxes))
+      ->default_str("p");
+  auto* delays =
+      sweep
+          ->add_option("--delays-ms", sweep_options.delays_ms, "with --over delay: the one-way delays, comma-separated")
+          ->delimiter(',')
+          ->check(program::number({0.0, 1000.0, false, false, "a delay in ms"}))
+          ->default_str("0,10,25,50,100");
+  auto* sweep_p = sweep->add_option("--p", sweep_options.p, "with --over delay: deadband p for both directions")
+                      ->check(program::number(program::kWeberFraction))
+                      ->default_str("0.1");
   sweep->add_option("--scenario", sweep_options.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
@@ -369,6 +386,17 @@ int main(int argc, char** argv) {
       std::signal(SIGTERM, on_stop_signal);
       return run_serve(serve_options, g_stop);
     }
+    if (sweep_options.over == SweepAxis::delay) {
+      if (sweep_options.scenario != ScenarioKind::wall_tap)
+        throw std::invalid_argument("sweep --over delay runs wall-tap only (the contact is what delay destabilizes)");
+      auto sorted = sweep_options.delays_ms;
+      std::sort(sorted.begin(), sorted.end());
+      if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+        throw std::invalid_argument("--delays-ms names a delay twice");
+      return run_delay_sweep(sweep_options);
+    }
+    if (delays->count() > 0 || sweep_p->count() > 0)
+      throw std::invalid_argument("--delays-ms and --p belong to sweep --over delay (--over p sweeps p itself)");
     if (sweep_options.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(sweep_options);
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {

@@ -98,7 +98,7 @@ TEST_CASE("tdpa keeps each port passive under delay; without it the channel make
 // Not met (issue 14): with tdpa the TOP's reference falls behind the HSI's (the drift pull gets energy only from
 // the HSI's input, a round trip late) and pushes into the wall past the torque limit once the energy comes; the
 // HSI's displayed force is cut while the operator pulls back, and the hand pushes through. Measured (seed 3,
-// trips of both levers in 20 s): with tdpa 7, 21, 14, 18 at 10, 25, 50, 100 ms; without (observe) 27, 23, 55
+// trips of both levers in 20 s): with tdpa 7, 19, 19, 17 at 10, 25, 50, 100 ms; without (observe) 27, 23, 55
 // at 25, 50, 100 ms. Catch's shouldfail: this fails once it is met.
 TEST_CASE("no lever trips its protection under delay with tdpa", "[hil][passivity][!shouldfail]") {
   for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {

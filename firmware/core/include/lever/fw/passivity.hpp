@@ -152,12 +152,12 @@ class PassivityPort {
   constexpr double available() const noexcept {
     return state_.received_j + state_.input_j - state_.passed_j - state_.output_j;
   }
-  // Passes the input beyond the reserve on, but never energy this port has already put out: what it passes
-  // only grows, and never takes `available` below zero.
+  // Passes the input beyond the reserve on; what it passes only grows. Under tdpa this never passes energy the
+  // port has already put out: its output is bounded by `available`, so what it kept of its own input, input -
+  // passed, is all it can have spent of it, and that is at most the reserve. Under observe the output is not
+  // bounded, and the input still goes on as it came, so the peer's observer sees the channel as it is.
   constexpr void settle() noexcept {
-    const double beyond_reserve = state_.input_j - config_.reserve_j;
-    const double unspent = state_.passed_j + available();
-    const double target = beyond_reserve < unspent ? beyond_reserve : unspent;
+    const double target = state_.input_j - config_.reserve_j;
     if (target > state_.passed_j) state_.passed_j = target;
     state_.observed_j = available();
   }
