@@ -75,7 +75,8 @@ struct Plant {
 template <typename Hal = BenchHal>
 class BenchPair {
  public:
-  BenchPair() : hsi(hsi_hal, config(protocol::Role::hsi)), top(top_hal, config(protocol::Role::top)) {
+  explicit BenchPair(fw::PassivityMode passivity = fw::PassivityMode::off)
+      : hsi(hsi_hal, config(protocol::Role::hsi, passivity)), top(top_hal, config(protocol::Role::top, passivity)) {
     hsi_hal.can_ = {&to_hsi, &to_top};
     top_hal.can_ = {&to_top, &to_hsi};
   }
@@ -112,9 +113,10 @@ class BenchPair {
   Plant hsi_plant, top_plant;
 
  private:
-  static fw::LeverConfig config(protocol::Role role) {
+  static fw::LeverConfig config(protocol::Role role, fw::PassivityMode passivity) {
     fw::LeverConfig c;
     c.role = role;
+    c.passivity.mode = passivity;
     if (role == protocol::Role::hsi) c.use_force_sensor = false;
     c.homing.method = fw::HomingMethod::absolute;  // the benchmarks time the armed pair, not homing
     return c;

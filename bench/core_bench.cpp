@@ -1,5 +1,5 @@
-// lever-bench-core: time per Lever::step() for each role in a running HSI/TOP pair, and the static memory of
-// one lever instance. Prints one JSON object.
+// lever-bench-core: time per Lever::step() for each role in a running HSI/TOP pair, with passivity off (the
+// paper's chain) and with tdpa, and the static memory of one lever instance. Prints one JSON object.
 //
 // Each step is timed on its own with steady_clock; the clock's own cost (the median of back-to-back reads)
 // is reported and subtracted. Several repetitions; the figure of merit is the median across them.
@@ -68,8 +68,8 @@ struct RoleTimes {
 };
 
 // One run of the pair (bench_pair.hpp), each role's step timed on its own.
-RoleTimes run_pair(std::size_t ticks) {
-  const auto pair = std::make_unique<bench::BenchPair<>>();
+RoleTimes run_pair(std::size_t ticks, fw::PassivityMode passivity) {
+  const auto pair = std::make_unique<bench::BenchPair<>>(passivity);
   RoleTimes times;
   times.hsi.reserve(ticks);
   times.top.reserve(ticks);
@@ -105,34 +105,46 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const double overhead = clock_overhead_ns();
-  std::vector<double> hsi_medians, top_medians, hsi_means, top_means, hsi_p99, top_p99;
+  // The two configurations alternate within one run, so that the machine's other load falls on both alike.
+  struct Figures {
+    std::vector<double> hsi_medians, top_medians, hsi_means, top_means, hsi_p99, top_p99;
+    void add(const RoleTimes& times, double overhead) {
+      hsi_medians.push_back(median(times.hsi) - overhead);
+      top_medians.push_back(median(times.top) - overhead);
+      hsi_means.push_back(mean(times.hsi) - overhead);
+      top_means.push_back(mean(times.top) - overhead);
+      hsi_p99.push_back(percentile(times.hsi, 0.99) - overhead);
+      top_p99.push_back(percentile(times.top, 0.99) - overhead);
+    }
+    // Per repetition: median, mean and p99 of the per-step times less the clock's cost; across repetitions
+    // the median of each. The mean is finer than the clock's granularity; the median is not.
+    nlohmann::json json() const {
+      return {{"hsi",
+               {{"median", median(hsi_medians)},
+                {"mean", median(hsi_means)},
+                {"p99", median(hsi_p99)},
+                {"means", hsi_means}}},
+              {"top",
+               {{"median", median(top_medians)},
+                {"mean", median(top_means)},
+                {"p99", median(top_p99)},
+                {"means", top_means}}}};
+    }
+  } off, tdpa;
   for (int r = 0; r < repetitions; ++r) {
-    const auto times = run_pair(ticks);
-    hsi_medians.push_back(median(times.hsi) - overhead);
-    top_medians.push_back(median(times.top) - overhead);
-    hsi_means.push_back(mean(times.hsi) - overhead);
-    top_means.push_back(mean(times.top) - overhead);
-    hsi_p99.push_back(percentile(times.hsi, 0.99) - overhead);
-    top_p99.push_back(percentile(times.top, 0.99) - overhead);
+    off.add(run_pair(ticks, fw::PassivityMode::off), overhead);
+    tdpa.add(run_pair(ticks, fw::PassivityMode::tdpa), overhead);
   }
   const nlohmann::json out{
       {"ticks_per_repetition", ticks},
       {"repetitions", repetitions},
       {"clock_overhead_ns", overhead},
       {"clock_granularity_ns", clock_granularity_ns()},
-      // Per repetition: median, mean and p99 of the per-step times less the clock's cost; across repetitions
-      // the median of each. The mean is finer than the clock's granularity; the median is not.
-      {"step_ns",
-       {{"hsi",
-         {{"median", median(hsi_medians)},
-          {"mean", median(hsi_means)},
-          {"p99", median(hsi_p99)},
-          {"means", hsi_means}}},
-        {"top",
-         {{"median", median(top_medians)},
-          {"mean", median(top_means)},
-          {"p99", median(top_p99)},
-          {"means", top_means}}}}},
+      {"step_ns", off.json()},
+      {"step_ns_tdpa", tdpa.json()},
+      {"tdpa_over_off_mean",
+       {{"hsi", median(tdpa.hsi_means) / median(off.hsi_means)},
+        {"top", median(tdpa.top_means) / median(off.top_means)}}},
       {"static_bytes_per_lever",
        {{"hsi", sizeof(fw::HsiLever<bench::BenchHal>)}, {"top", sizeof(fw::TopLever<bench::BenchHal>)}}},
       {"static_bytes_note", "sizeof(Lever<Hal, Role>): all state of one lever; the HAL it refers to is the board's"},

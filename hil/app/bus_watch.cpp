@@ -57,6 +57,7 @@ void BusWatch::take(const protocol::CanFrame& f, bool hsi_site, bool top_site, s
       break;
     }
     case protocol::MessageKind::command:
+    case protocol::MessageKind::energy:
       break;
   }
 }

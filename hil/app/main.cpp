@@ -2,6 +2,7 @@
 // physical world on the wall clock to real lever-fw processes.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "delay_sweep.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/output_file.hpp"
@@ -37,9 +39,15 @@ const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_
 const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 const program::Choices<lever::fw::MotionVelocity> kMotionVelocities{
     {"difference", lever::fw::MotionVelocity::difference}, {"estimate", lever::fw::MotionVelocity::estimate}};
+const program::Choices<lever::hil::SweepAxis> kSweepAxes{{"p", lever::hil::SweepAxis::p},
+                                                         {"delay", lever::hil::SweepAxis::delay}};
+const program::Choices<lever::fw::PassivityMode> kPassivity{{"off", lever::fw::PassivityMode::off},
+                                                            {"observe", lever::fw::PassivityMode::observe},
+                                                            {"tdpa", lever::fw::PassivityMode::tdpa}};
 const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
 // Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
+constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
 constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
 constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
@@ -54,6 +62,8 @@ struct RunOptions {
   double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
   double comms_timeout_ms = static_cast<double>(lever::fw::LeverConfig{}.comms_timeout);
   bool no_homing = false;
+  lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
+  double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -142,6 +152,14 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
       ->check(program::whole(1, 10000, "a whole number of milliseconds"))
       ->default_str(std::to_string(lever::fw::LeverConfig{}.comms_timeout));
+  cmd.add_option("--passivity", o.passivity,
+                 "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
+      ->transform(program::one_of(kPassivity))
+      ->default_str("off");
+  cmd.add_option("--passivity-reserve-j", o.passivity_reserve_j,
+                 "of each port's own input energy, what it keeps for its own output (0: the literature's TDPA)")
+      ->check(program::number(kReserveJoules))
+      ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.reserve_j));
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
                "random angle, homed against the end stop before the scenario)");
@@ -185,6 +203,10 @@ SimConfig finish(RunOptions& o) {
                    o.filter_hz_force.value_or(o.filter_hz)};
   c.hsi_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
+  c.hsi_firmware.passivity.mode = o.passivity;
+  c.top_firmware.passivity.mode = o.passivity;
+  c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
   for (const auto& f : o.faults) {
     c.faults.push_back(parse_fault_spec(f));
     if (c.faults.back().start_s >= c.duration_s)
@@ -256,7 +278,20 @@ int main(int argc, char** argv) {
   add_run_options(*run, run_options);
 
   SweepOptions sweep_options;
-  auto* sweep = app.add_subcommand("sweep", "sweep p for each mode and seed; CSV and gnuplot PNG plots");
+  auto* sweep = app.add_subcommand(
+      "sweep", "sweep p for each mode, or the network delay with and without passivity; CSV and gnuplot PNG plots");
+  sweep->add_option("--over", sweep_options.over, "what to sweep: p (the paper's figures) or delay (wall-tap only)")
+      ->transform(program::one_of(kSweepAxes))
+      ->default_str("p");
+  auto* delays =
+      sweep
+          ->add_option("--delays-ms", sweep_options.delays_ms, "with --over delay: the one-way delays, comma-separated")
+          ->delimiter(',')
+          ->check(program::number({0.0, 1000.0, false, false, "a delay in ms"}))
+          ->default_str("0,10,25,50,100");
+  auto* sweep_p = sweep->add_option("--p", sweep_options.p, "with --over delay: deadband p for both directions")
+                      ->check(program::number(program::kWeberFraction))
+                      ->default_str("0.1");
   sweep->add_option("--scenario", sweep_options.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
       ->default_str("wall-tap");
@@ -351,6 +386,17 @@ int main(int argc, char** argv) {
       std::signal(SIGTERM, on_stop_signal);
       return run_serve(serve_options, g_stop);
     }
+    if (sweep_options.over == SweepAxis::delay) {
+      if (sweep_options.scenario != ScenarioKind::wall_tap)
+        throw std::invalid_argument("sweep --over delay runs wall-tap only (the contact is what delay destabilizes)");
+      auto sorted = sweep_options.delays_ms;
+      std::sort(sorted.begin(), sorted.end());
+      if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+        throw std::invalid_argument("--delays-ms names a delay twice");
+      return run_delay_sweep(sweep_options);
+    }
+    if (delays->count() > 0 || sweep_p->count() > 0)
+      throw std::invalid_argument("--delays-ms and --p belong to sweep --over delay (--over p sweeps p itself)");
     if (sweep_options.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(sweep_options);
     return run_sweep(sweep_options);
   } catch (const std::invalid_argument& e) {

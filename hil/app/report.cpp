@@ -55,6 +55,13 @@ std::string trace_csv_row(const TraceRow& r) {
                      r.hsi_state, r.top_state);
 }
 
+nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
+  nlohmann::json names = nlohmann::json::array();
+  for (const auto fault : protocol::kAllFaults)
+    if (protocol::has(f.bits, fault)) names.push_back(std::string(protocol::name(fault)));
+  return {{"count", f.count}, {"faults", names}};
+}
+
 nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : r.faults) {
@@ -88,6 +95,13 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"bus_load_top", r.bus_load_top},
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
+      {"contact_onsets_per_s", r.contact_onsets_per_s},
+      {"passivity",
+       {{"hsi",
+         {{"dissipated_energy_j", r.hsi_dissipated_energy_j}, {"min_observed_energy_j", r.hsi_min_observed_energy_j}}},
+        {"top",
+         {{"dissipated_energy_j", r.top_dissipated_energy_j}, {"min_observed_energy_j", r.top_min_observed_energy_j}}},
+        {"energy_frames", r.energy_frames}}},
       {"armed_s", static_cast<double>(r.armed_ticks) * 1e-3},
       {"frames", {{"motion", r.motion_frames}, {"force", r.force_frames}}},
       {"network", {{"datagrams", r.network_sent}, {"lost", r.network_lost}, {"reordered", r.network_reordered}}},
@@ -97,6 +111,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"overruns", {{"hsi", r.hsi_overruns}, {"top", r.top_overruns}}},
       {"encoder_edges_lost", {{"hsi", r.hsi_edges_lost}, {"top", r.top_edges_lost}}},
       {"faults", faults},
+      {"lever_faults",
+       {{"hsi", lever_faults_json(r.hsi_lever_faults)}, {"top", lever_faults_json(r.top_lever_faults)}}},
       {"parameters",
        {{"velocity", codec_json(config.velocity_codec)},
         {"force", codec_json(config.force_codec)},
@@ -105,6 +121,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"jitter_ms", config.network.jitter_ms},
         {"loss", config.network.loss},
         {"comms_timeout_ms", config.top_firmware.comms_timeout},
+        {"passivity", fw::name(config.top_firmware.passivity.mode)},
+        {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
         {"homing", config.homing},
         {"jnd", config.jnd},
         {"jnd_absolute_n", config.jnd_absolute_n},

@@ -118,18 +118,7 @@ int run_sweep(const SweepOptions& o) {
   std::string runs =
       "variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,position_rmse,"
       "force_rmse,bus_load,realtime_factor\n";
-  // Each metric over the seeds of a point: mean, min and max, in the plots' units.
-  struct Spread {
-    double sum = 0, min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
-    void add(double x) {
-      sum += x;
-      min = std::min(min, x);
-      max = std::max(max, x);
-    }
-    std::string csv(int n, double scale, int digits) const {
-      return fmt::format(",{:.{}f},{:.{}f},{:.{}f}", scale * sum / n, digits, scale * min, digits, scale * max, digits);
-    }
-  };
+
   std::string summary = "variant,p_percent,seeds";
   for (const char* m :
        {"velocity_rate_percent", "force_rate_percent", "jnd_violation_percent", "position_rmse_mrad", "force_rmse_n"})

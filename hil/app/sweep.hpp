@@ -1,11 +1,17 @@
 #pragma once
 #include <string>
+#include <vector>
 
 #include "lever/hil/human_operator.hpp"
 
 namespace lever::hil {
 
+// What a sweep varies: p for each codec variant (the paper's figures), or the one-way delay with and without
+// passivity (issue 14).
+enum class SweepAxis { p, delay };
+
 struct SweepOptions {
+  SweepAxis over = SweepAxis::p;
   ScenarioKind scenario = ScenarioKind::wall_tap;
   std::string out_dir;
   int seeds = 3;
@@ -19,6 +25,9 @@ struct SweepOptions {
   // beyond the loop's 500 Hz Nyquist, so any cut-off the 1 kHz loop can have removes what can be felt: off.
   double filter_hz_velocity = 30.0;
   double filter_hz_force = 0.0;
+  // --over delay: the one-way delays, and p for both directions (deadband, no floor or filter).
+  std::vector<double> delays_ms{0.0, 10.0, 25.0, 50.0, 100.0};
+  double p = 0.1;
 };
 
 int run_sweep(const SweepOptions& options);

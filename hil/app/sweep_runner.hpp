@@ -1,13 +1,30 @@
 #pragma once
 // What every lever-hil sweep does around its runs: the output directory, the runs in parallel with a progress
 // line, and the plots.
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
+#include <limits>
 #include <string>
 
 namespace lever::hil {
+
+// One metric over the seeds of a point: mean, min and max, written in the plots' units.
+struct Spread {
+  double sum = 0, min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+  void add(double x) {
+    sum += x;
+    min = std::min(min, x);
+    max = std::max(max, x);
+  }
+  std::string csv(int n, double scale, int digits) const {
+    return fmt::format(",{:.{}f},{:.{}f},{:.{}f}", scale * sum / n, digits, scale * min, digits, scale * max, digits);
+  }
+};
 
 // Makes the output directory, refusing one that is a file and any of `files` in it that is not a regular file.
 void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files);

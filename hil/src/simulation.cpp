@@ -15,6 +15,16 @@
 namespace lever::hil {
 namespace {
 
+// A lever's dissipated energy over the run, from its telemetry's count since it last armed.
+struct RunningTotal {
+  double last_j = 0.0;
+  double total_j = 0.0;
+  void add(double since_armed_j) {
+    total_j += since_armed_j >= last_j ? since_armed_j - last_j : since_armed_j;  // below the last: it re-armed
+    last_j = since_armed_j;
+  }
+};
+
 constexpr Nanos kTick = 1'000'000;
 constexpr fw::Tick kHostPeriod = 100;       // the host looks at the levers every 100 ms
 constexpr fw::Tick kPowerUpLimit = 30'000;  // homing and arming must be done by then
@@ -245,6 +255,8 @@ SimResult run_simulation(const SimConfig& config) {
   result.prefilter_delay_ms =
       config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0;
   // The TOP's measurements of the last nominal delay's ticks, for the distortion without the transport delay.
+  RunningTotal dissipated[2];        // HSI, TOP
+  bool was_armed[2] = {true, true};  // the scenario starts with both armed
   std::vector<std::optional<double>> measured_history(static_cast<std::size_t>(result.nominal_delay_ticks) + 1);
   double fault_quiet_until = 0.0;  // the host waits for faults to end before re-arming
   fw::Tick start = 0;              // the last tick before the scenario; 0 while powering up
@@ -373,8 +385,26 @@ SimResult run_simulation(const SimConfig& config) {
       return measured_history[static_cast<std::size_t>(k) % measured_history.size()];
     };
     slot(tick) = both_armed ? tt.force_n : std::nullopt;
+    // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
+    // Every fault a lever latched while the scenario ran, injected or not: a delayed loop that trips a
+    // lever's own protection (TORQUE_LIMIT, POSITION_LIMIT) has not survived the delay, whatever else it did.
+    for (int i = 0; i < 2; ++i) {
+      const auto& supervisor = i == 0 ? hl.supervisor() : tl.supervisor();
+      const bool armed = supervisor.armed();
+      auto& lever_faults = i == 0 ? result.hsi_lever_faults : result.top_lever_faults;
+      if (was_armed[i] && !armed && supervisor.state() == fw::LeverState::fault) {
+        ++lever_faults.count;
+        lever_faults.bits |= supervisor.latched();
+      }
+      was_armed[i] = armed;
+    }
+    // (From the ports themselves: the telemetry holds it only on the ticks the controllers run.)
+    dissipated[0].add(hl.role().passivity().state().dissipated_j);
+    dissipated[1].add(tl.role().passivity().state().dissipated_j);
     if (both_armed) {
       result.refresh_frames += ht.sent_refresh + tt.sent_refresh;
+      result.hsi_min_observed_energy_j = std::min(result.hsi_min_observed_energy_j, ht.observed_energy_j);
+      result.top_min_observed_energy_j = std::min(result.top_min_observed_energy_j, tt.observed_energy_j);
       metrics.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), displayed, measured,
                              contact);
       const auto& sender = tl.role().sender().codec_sender();
@@ -429,6 +459,9 @@ SimResult run_simulation(const SimConfig& config) {
   result.network_sent = to_top.stats().sent + to_hsi.stats().sent;
   result.network_lost = to_top.stats().lost + to_hsi.stats().lost;
   result.network_reordered = to_top.stats().reordered + to_hsi.stats().reordered;
+  result.hsi_dissipated_energy_j = dissipated[0].total_j;
+  result.top_dissipated_energy_j = dissipated[1].total_j;
+  result.energy_frames = hl.counters().energy_sent + tl.counters().energy_sent;
   result.hsi_seq_gaps = hl.role().receiver().sequence().missing();
   result.top_seq_gaps = tl.role().receiver().sequence().missing();
   result.hsi_overruns = hl.timing().stats().overruns;

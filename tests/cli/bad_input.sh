@@ -107,6 +107,20 @@ num "run --gauge-noise-n nan" "--gauge-noise-n must be a noise in N rms in [0, 1
 num "sweep --duration nan" "--duration must be" "$hil" sweep --out "$work/sw" --duration nan
 num "sweep --seeds 0" "--seeds must be a whole number in [1, 100], got 0" "$hil" sweep --out "$work/sw" --seeds 0
 num "sweep --jobs 1e9" "--jobs must be a whole number in [1, 64], got '1e9'" "$hil" sweep --out "$work/sw" --jobs 1e9
+num "sweep --over delay --scenario sphere-3dof" "sweep --over delay runs wall-tap only" \
+  "$hil" sweep --out "$work/sw" --over delay --scenario sphere-3dof
+num "sweep --delays-ms nan" "--delays-ms must be a delay in ms in [0, 1000], got 'nan'" \
+  "$hil" sweep --out "$work/sw" --over delay --delays-ms 0,nan
+num "sweep --delays-ms -1" "--delays-ms must be a delay in ms in [0, 1000], got -1" \
+  "$hil" sweep --out "$work/sw" --over delay --delays-ms -1
+num "sweep --delays-ms 2000" "--delays-ms must be a delay in ms in [0, 1000], got 2000" \
+  "$hil" sweep --out "$work/sw" --over delay --delays-ms 2000
+num "sweep --delays-ms empty" "--delays-ms must be" "$hil" sweep --out "$work/sw" --over delay --delays-ms ""
+num "sweep --delays-ms twice the same" "--delays-ms names a delay twice" \
+  "$hil" sweep --out "$work/sw" --over delay --delays-ms 10,0,10
+num "sweep --delays-ms without --over delay" "--delays-ms and --p belong to sweep --over delay" \
+  "$hil" sweep --out "$work/sw" --delays-ms 10
+num "sweep --over sideways" "--over" "$hil" sweep --out "$work/sw" --over sideways
 check "the refused sweeps made no directory" test ! -e "$work/sw"
 printf '[lever]\nrole = "hsi"\n' >"$work/hsi.toml"
 printf '[lever]\nrole = "top"\n' >"$work/top.toml"

@@ -73,6 +73,13 @@ check "status lines are JSON with the documented fields" \
   jq -e 'has("role") and has("state") and has("faults") and has("position_valid") and has("force_n") and
          has("wakeup_latency_us") and has("encoder") and has("modbus") and .role == "top"' "$work/stats" >/dev/null
 check "the simulated TOP homes and arms" jq -se 'map(.state) | index("armed") != null' "$work/stats" >/dev/null
+check "passivity is off by default and sends no energy frames" \
+  jq -se 'all(.passivity.mode == "off" and .passivity.energy_sent == 0)' "$work/stats" >/dev/null
+sed 's/^mode = "off"/mode = "tdpa"/' "$examples/hsi.toml" >"$work/hsi-tdpa.toml"
+"$fw" --config "$work/hsi-tdpa.toml" --sim --fast --duration 3 --stats-json >"$work/stats-tdpa" 2>"$work/err"
+check "with control.passivity.mode = tdpa the HSI sends energy frames and reports its energy" \
+  jq -se 'last | .passivity.mode == "tdpa" and .passivity.energy_sent > 0 and .passivity.observed_energy_j >= -1e-6
+          and .passivity.dissipated_energy_j >= 0' "$work/stats-tdpa" >/dev/null
 
 # On a machine without the board's hardware: a runtime failure naming what could not be opened, no hang.
 printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n' >"$work/nochip.toml"

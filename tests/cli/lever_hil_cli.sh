@@ -55,6 +55,26 @@ for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png di
 done
 check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
 
+# The delay sweep (issue 14): without passivity (observe) and with tdpa at each delay.
+"$hil" sweep --over delay --delays-ms 0,50 --seeds 2 --duration 2 --out "$work/dsweep" >"$work/ds.out" 2>"$work/ds.err"
+check "sweep --over delay exits 0" test $? -eq 0
+check "sweep --over delay printed progress" grep -q "sweep: 8/8 runs" "$work/ds.err"
+for f in sweep.csv summary.csv delay_packet_rates.png delay_force_error.png delay_chatter.png delay_energy.png \
+  delay_position.png; do
+  check "sweep --over delay wrote $f" test -s "$work/dsweep/$f"
+done
+check "delay summary: 2 variants x 2 delays" test "$(wc -l <"$work/dsweep/summary.csv")" -eq 5
+check "delay runs: 8" test "$(wc -l <"$work/dsweep/sweep.csv")" -eq 9
+check "delay summary names its columns" \
+  grep -q '^variant,delay_ms,seeds,velocity_rate_percent,.*,contact_onsets_per_s,.*,protection_trips,.*,hsi_dissipated_j,' \
+  "$work/dsweep/summary.csv"
+# Column 10 is energy frames per second, 16 the JND violation, 28 the HSI's dissipated energy (means).
+check "tdpa rows carry energy frames and, at 50 ms, dissipate" \
+  awk -F, '$1 == "tdpa" && !($10 > 0) { bad = 1 } $1 == "tdpa" && $2 == 50 && !($28 + $31 > 0) { bad = 1 }
+           END { exit bad }' "$work/dsweep/summary.csv"
+check "without tdpa nothing is dissipated" \
+  awk -F, '$1 == "without" && ($28 != 0 || $31 != 0) { bad = 1 } END { exit bad }' "$work/dsweep/summary.csv"
+
 # sphere-3dof, the paper's 3-DoF experiment: its own report, trace and sweep.
 args=(run --scenario sphere-3dof --duration 2 --seed 3 --p-velocity 0 --p-force 0.05 --json)
 "$hil" "${args[@]}" >"$work/s1.json"; check "sphere-3dof run --json exits 0" test $? -eq 0

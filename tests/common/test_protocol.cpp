@@ -15,7 +15,9 @@ TEST_CASE("ids carry the pair, and lower ids win arbitration for commands and da
   CHECK(heartbeat_id(0, Role::hsi) == 0x700);
   CHECK(heartbeat_id(2, Role::top) == 0x705);
   CHECK(command_id(15) < motion_id(0));
-  CHECK(force_id(15) < heartbeat_id(0, Role::hsi));
+  CHECK(force_id(15) < energy_id(0, Role::hsi));
+  CHECK(energy_id(15, Role::top) == 0x13F);
+  CHECK(energy_id(15, Role::top) < heartbeat_id(0, Role::hsi));
   CHECK(heartbeat_id(15, Role::top) <= kMaxStandardId);
 
   FrameAddress a;
@@ -23,7 +25,11 @@ TEST_CASE("ids carry the pair, and lower ids win arbitration for commands and da
   CHECK(a.kind == MessageKind::heartbeat);
   CHECK(a.pair == 2);
   CHECK(a.role == Role::top);
-  CHECK(classify(0x120, a) == DecodeError::unknown_id);
+  REQUIRE(classify(0x123, a) == DecodeError::none);
+  CHECK(a.kind == MessageKind::energy);
+  CHECK(a.pair == 1);
+  CHECK(a.role == Role::top);
+  CHECK(classify(0x140, a) == DecodeError::unknown_id);
   CHECK(classify(0x720, a) == DecodeError::unknown_id);
   CHECK(classify(0x7FF, a) == DecodeError::unknown_id);
 }
@@ -154,14 +160,14 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
   // Decoding must return a defined code, and a frame that decodes must re-pack to the very same bytes:
   // nothing in a payload may be silently dropped or invented.
   lever::Rng rng(99);
-  const std::uint32_t bases[] = {kCommandBase, kMotionBase, kForceBase, kHeartbeatBase};
-  int decoded[4] = {0, 0, 0, 0}, rejected[4] = {0, 0, 0, 0};
-  for (int i = 0; i < 40000; ++i) {
-    const std::size_t kind = rng.next() % 4;
+  const std::uint32_t bases[] = {kCommandBase, kMotionBase, kForceBase, kHeartbeatBase, kEnergyBase};
+  int decoded[5] = {0, 0, 0, 0, 0}, rejected[5] = {0, 0, 0, 0, 0};
+  for (int i = 0; i < 50000; ++i) {
+    const std::size_t kind = rng.next() % 5;
     const auto pair = static_cast<std::uint8_t>(rng.next() % kPairCount);
     const Role role = (rng.next() & 1) ? Role::top : Role::hsi;
     CanFrame f;
-    f.id = kind == 3 ? heartbeat_id(pair, role) : bases[kind] + pair;
+    f.id = kind == 3 ? heartbeat_id(pair, role) : kind == 4 ? energy_id(pair, role) : bases[kind] + pair;
     f.dlc = static_cast<std::uint8_t>(rng.next() % 8 == 0 ? rng.next() % 16 : 8);  // mostly the right length
     for (auto& b : f.data) b = static_cast<std::uint8_t>(rng.next());
     // Sparse payloads too: random bytes almost always set some reserved bit.
@@ -189,6 +195,12 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
         if (e == DecodeError::none) again = pack(m, pair);
         break;
       }
+      case 4: {
+        EnergyMessage m;
+        e = decode(f, m, a);
+        if (e == DecodeError::none) again = pack(m, pair, role);
+        break;
+      }
       default: {
         HeartbeatMessage h;
         e = decode(f, h, a);
@@ -210,7 +222,7 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
     }
   }
   // Every kind was exercised on both paths, decoded and refused, hundreds of times each.
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 5; ++k) {
     INFO("kind " << k);
     CHECK(decoded[k] > 200);
     CHECK(rejected[k] > 200);

@@ -88,7 +88,7 @@ void check_frame(const DbcMessage& dbc, const CanFrame& frame, const Expected& e
 
 TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]") {
   const auto dbc = parse_dbc(LEVER_DBC_PATH);
-  REQUIRE(dbc.size() == 5);
+  REQUIRE(dbc.size() == 7);
   lever::Rng rng(5);
   auto flag = [&rng] { return (rng.next() & 1) != 0; };
   for (int i = 0; i < 500; ++i) {
@@ -122,6 +122,14 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
                  {"Refresh", f.flags.refresh},
                  {"Predictive", f.flags.mode == lever::codec::Mode::predictive},
                  {"Restart", f.flags.restart}});
+
+    EnergyMessage e;
+    e.energy = static_cast<std::uint32_t>(rng.next());
+    e.tick = static_cast<std::uint16_t>(rng.next());
+    e.epoch = static_cast<std::uint8_t>(rng.next());
+    const Expected energy{{"Energy", e.energy * kEnergyLsbJ}, {"Tick", e.tick}, {"Epoch", e.epoch}};
+    check_frame(dbc.at("LeverEnergyHsi"), pack(e, 0, Role::hsi), energy);
+    check_frame(dbc.at("LeverEnergyTop"), pack(e, 0, Role::top), energy);
 
     const HeartbeatMessage h = lever::test::random_heartbeat(rng);
     const Expected heartbeat{{"State", static_cast<double>(h.state)},

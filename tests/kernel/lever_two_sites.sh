@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs inside the kernel rig with gpio-sim (run-in-guest --gpio-sim): two sites. The HSI's lever-fw on vcan0, the
 # TOP's on vcan1 (its strain gauge on Modbus RTU over a pseudo-terminal), joined by two lever-bridges over UDP
-# on loopback, where the kernel's netem delays every datagram by 20 ms and loses 2 %. lever-hil serve plays
+# on loopback, where the kernel's netem delays every datagram by 20 ms and loses 2 %. Both run the time-domain
+# passivity controller (control.passivity.mode = "tdpa"; issue 14), so its energy frames cross the link too. lever-hil serve plays
 # both levers' world, hands off (the wall taps are lever_one_site.sh's; here it is the link). Then the link is cut (netem loss 100 %): both levers must go to their safe states, stay
 # there when the link is back, and come back only by a re-arm.
 # usage: lever_two_sites.sh BIN_DIR
@@ -12,8 +13,9 @@ set -uo pipefail
 trap stop_all EXIT
 
 lever_chip hsi && lever_chip top || exit 1
-write_config hsi vcan0
-write_config top vcan1 'transport = "rtu"' "device = \"$work/top-gauge.tty\"" 'baud = 115200'
+write_config hsi vcan0 '[control.passivity]' 'mode = "tdpa"'
+write_config top vcan1 'transport = "rtu"' "device = \"$work/top-gauge.tty\"" 'baud = 115200' \
+  '[control.passivity]' 'mode = "tdpa"'
 # Loopback carries only the bridges' datagrams here (the gauge is on the pty), so netem on lo is the link.
 check "netem: 20 ms one-way delay, 2 % loss on the link" tc qdisc add dev lo root netem delay 20ms loss 2%
 "$bin/lever-bridge" --can vcan0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key" --site-id 1 \
@@ -44,6 +46,10 @@ check "the bridges carried the pair's frames both ways" \
   test "$(tail -n 1 "$out/bridge-top.stats" | jq '.from_network.frames > 100 and .to_network.frames > 100')" = true
 check "netem lost some of them: the receiving bridge saw sequence gaps" \
   test "$(tail -n 1 "$out/bridge-top.stats" | jq '.from_network.sequence_gaps > 0')" = true
+for role in hsi top; do
+  check "$role: tdpa runs ($(last_stat $role .passivity.energy_sent) energy frames sent) and its port's observed energy is not negative" \
+    test "$(last_stat $role '.passivity.mode == "tdpa" and .passivity.energy_sent > 0 and .passivity.observed_energy_j >= -1e-6')" = true
+done
 
 # The link cut: every datagram lost.
 tc qdisc change dev lo root netem delay 20ms loss 100%
@@ -73,4 +79,6 @@ check "the TOP holds the HSI's position over the link: rms error $(r .position_r
 "$dbc_decode" --summary "$dbc" "$out/two-sites-hsi.candump" >"$work/decoded"; code=$?
 jq -c '.messages | map_values(.frames)' "$work/decoded"
 check "every frame on the HSI's bus decodes by the DBC, the TOP's relayed ones too (exit $code)" test "$code" -eq 0
+check "the TOP's energy frames crossed the link to the HSI's bus" \
+  test "$(jq '.messages.LeverEnergyTop.frames > 0' "$work/decoded")" = true
 finish "lever-fw two sites"

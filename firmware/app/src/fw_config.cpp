@@ -174,6 +174,14 @@ ConfigSchema schema_for(FwConfig& config) {
            "HSI damping while a contact force is displayed");
   s.number("control.display.contact_threshold_n", l.display.contact_threshold_n, 0.0, 100.0, "N",
            "displayed force above which the lever is in contact");
+  s.choice(
+      "control.passivity.mode", l.passivity.mode,
+      {{"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}},
+      "time-domain passivity: off, observe (observer and energy frames only) or tdpa (the controller acts)");
+  s.number("control.passivity.drift_gain_per_s", l.passivity.drift_gain_per_s, 0.0, 999.0, "1/s",
+           "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
+  s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",
+           "of the port's own input, what it keeps for its own output (0: the literature's per-port TDPA)");
 
   s.number("safety.torque_limit_nm", l.torque_limit_nm, 1e-3, 100.0, "N m", "never exceeded");
   s.integer("safety.torque_saturation_ms", l.torque_saturation_ticks, 1, 60000, "ms",

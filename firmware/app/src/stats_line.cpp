@@ -54,6 +54,11 @@ nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
         {"timeouts", optional(board.modbus_timeouts)},
         {"reconnects", optional(board.modbus_reconnects)}}},
       {"minor_faults", optional(board.minor_faults)},
+      {"passivity",
+       {{"mode", fw::name(s.passivity)},
+        {"energy_sent", s.counters.energy_sent},
+        {"dissipated_energy_j", s.dissipated_energy_j},
+        {"observed_energy_j", s.observed_energy_j}}},
   };
 }
 

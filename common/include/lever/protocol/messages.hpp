@@ -21,11 +21,15 @@ constexpr std::uint8_t kPairCount = 16;
 constexpr std::uint32_t kCommandBase = 0x080;    // 0x080 + pair
 constexpr std::uint32_t kMotionBase = 0x100;     // 0x100 + pair, HSI -> TOP
 constexpr std::uint32_t kForceBase = 0x110;      // 0x110 + pair, TOP -> HSI
+constexpr std::uint32_t kEnergyBase = 0x120;     // 0x120 + 2 * pair + role: a data sender's port energy
 constexpr std::uint32_t kHeartbeatBase = 0x700;  // 0x700 + 2 * pair + role
 
 constexpr std::uint32_t command_id(std::uint8_t pair) noexcept { return kCommandBase + pair; }
 constexpr std::uint32_t motion_id(std::uint8_t pair) noexcept { return kMotionBase + pair; }
 constexpr std::uint32_t force_id(std::uint8_t pair) noexcept { return kForceBase + pair; }
+constexpr std::uint32_t energy_id(std::uint8_t pair, Role role) noexcept {
+  return kEnergyBase + 2u * pair + static_cast<std::uint32_t>(role);
+}
 constexpr std::uint32_t heartbeat_id(std::uint8_t pair, Role role) noexcept {
   return kHeartbeatBase + 2u * pair + static_cast<std::uint32_t>(role);
 }
@@ -38,12 +42,12 @@ enum class DecodeError : std::uint8_t {
   out_of_range = 3,  // an enumeration or reserved field holds a value the protocol does not define
 };
 
-enum class MessageKind : std::uint8_t { command, motion, force, heartbeat };
+enum class MessageKind : std::uint8_t { command, motion, force, energy, heartbeat };
 
 struct FrameAddress {
   MessageKind kind{};
   std::uint8_t pair = 0;
-  Role role = Role::hsi;  // the sender's role (heartbeat); HSI for motion, TOP for force; unused for command
+  Role role = Role::hsi;  // the sender's role (heartbeat, energy); HSI for motion, TOP for force; unused for command
 };
 
 // What an identifier means, or unknown_id.
@@ -54,6 +58,9 @@ constexpr DecodeError classify(std::uint32_t id, FrameAddress& out) noexcept {
     out = {MessageKind::motion, static_cast<std::uint8_t>(id - kMotionBase), Role::hsi};
   } else if (id >= kForceBase && id < kForceBase + kPairCount) {
     out = {MessageKind::force, static_cast<std::uint8_t>(id - kForceBase), Role::top};
+  } else if (id >= kEnergyBase && id < kEnergyBase + 2u * kPairCount) {
+    const auto offset = id - kEnergyBase;
+    out = {MessageKind::energy, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
   } else if (id >= kHeartbeatBase && id < kHeartbeatBase + 2u * kPairCount) {
     const auto offset = id - kHeartbeatBase;
     out = {MessageKind::heartbeat, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
@@ -72,6 +79,8 @@ inline constexpr double kVelocityLsb = 1e-3;
 inline constexpr double kForceLsb = 1e-5;
 inline constexpr std::int32_t kForceCodeMax = (1 << 23) - 1;
 inline constexpr std::int32_t kForceCodeMin = -(1 << 23);
+// Port energy: 1 uJ in an unsigned 32-bit field that wraps (4294.97 J); docs/can-protocol.md, "Energy".
+inline constexpr double kEnergyLsbJ = 1e-6;
 // Deadband parameters in the command frame.
 inline constexpr double kPLsb = 1e-4;        // p up to 6.5535
 inline constexpr double kFloorLsb = 1e-3;    // rad/s or N, up to 65.535
@@ -103,6 +112,15 @@ struct ForceMessage {
   std::uint16_t tick = 0;
   std::uint8_t seq = 0;
   DataFlags flags;
+};
+
+// Either lever -> its peer, in the tick of a data frame (the passivity observer, firmware.md): the input energy
+// the sender's port passed on since it armed (all of it unless the port keeps a reserve), cumulative and never
+// decreasing, so the receiver can take the newest as the largest and drop older ones whatever order they come in.
+struct EnergyMessage {
+  std::uint32_t energy = 0;  // kEnergyLsbJ, modulo 2^32: the receiver adds the modular difference (below 2^31)
+  std::uint16_t tick = 0;    // sender's 1 ms tick, modulo 2^16
+  std::uint8_t epoch = 0;    // the sender's arming count modulo 256: a new epoch restarts the account
 };
 
 // Stable numbers: on the wire in heartbeats.
@@ -177,6 +195,14 @@ constexpr CanFrame pack(const ForceMessage& m, std::uint8_t pair) noexcept {
   return f;
 }
 
+constexpr CanFrame pack(const EnergyMessage& m, std::uint8_t pair, Role role) noexcept {
+  CanFrame f = detail::frame(energy_id(pair, role));
+  put_bits(f.data, 0, 32, m.energy);
+  put_bits(f.data, 32, 16, m.tick);
+  put_bits(f.data, 48, 8, m.epoch);
+  return f;
+}
+
 constexpr CanFrame pack(const HeartbeatMessage& m, std::uint8_t pair, Role role) noexcept {
   CanFrame f = detail::frame(heartbeat_id(pair, role));
   put_bits(f.data, 0, 4, static_cast<std::uint8_t>(m.state));
@@ -231,6 +257,15 @@ constexpr DecodeError decode(const CanFrame& f, ForceMessage& m, FrameAddress& a
   m.seq = static_cast<std::uint8_t>(get_bits(f.data, 40, 8));
   if (const auto e = detail::unpack_flags(get_bits(f.data, 48, 8), m.flags); e != DecodeError::none) return e;
   return m.flags.velocity_saturated ? DecodeError::out_of_range : DecodeError::none;
+}
+
+constexpr DecodeError decode(const CanFrame& f, EnergyMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::energy, address); e != DecodeError::none) return e;
+  if (get_bits(f.data, 56, 8) != 0) return DecodeError::out_of_range;  // reserved byte
+  m.energy = static_cast<std::uint32_t>(get_bits(f.data, 0, 32));
+  m.tick = static_cast<std::uint16_t>(get_bits(f.data, 32, 16));
+  m.epoch = static_cast<std::uint8_t>(get_bits(f.data, 48, 8));
+  return DecodeError::none;
 }
 
 constexpr DecodeError decode(const CanFrame& f, HeartbeatMessage& m, FrameAddress& address) noexcept {

@@ -26,6 +26,15 @@ class RunMetrics {
       ++contact_ticks_;
       contact_force_sum_ += contact_n;
     }
+    // An onset needs the lever to have left the wall entirely (zero force) and then to press past the
+    // firmware's own contact threshold (ForceDisplay's 0.1 N, ten times the gauge's noise): a lever resting on
+    // the wall grazes it at micronewtons from one physics substep to the next, which is no new contact.
+    if (contact_n <= 0.0) {
+      touching_ = false;
+    } else if (!touching_ && contact_n > kContactOnsetN) {
+      touching_ = true;
+      ++contact_onsets_;
+    }
   }
 
   // The displayed force's distortion by cause, for a run that can see inside the TOP's sender (not serve):
@@ -58,11 +67,15 @@ class RunMetrics {
     r.force_jnd_violation_codec = static_cast<double>(violations_codec_) / c;
     r.force_jnd_violation_filter = static_cast<double>(violations_filter_) / c;
     r.contact_share = static_cast<double>(contact_ticks_) / n;
+    r.contact_onsets_per_s = static_cast<double>(contact_onsets_) / (n * 1e-3);
     r.mean_contact_force_n = contact_ticks_ > 0 ? contact_force_sum_ / static_cast<double>(contact_ticks_) : 0.0;
   }
 
   std::uint64_t armed_ticks() const { return armed_ticks_; }
   std::uint64_t contact_ticks() const { return contact_ticks_; }
+  std::uint64_t contact_onsets() const { return contact_onsets_; }
+
+  static constexpr double kContactOnsetN = 0.1;
   std::uint64_t motion_frames() const { return motion_frames_; }
   std::uint64_t force_frames() const { return force_frames_; }
 
@@ -77,6 +90,8 @@ class RunMetrics {
   std::uint64_t cause_ticks_ = 0, violations_link_ = 0, violations_codec_ = 0, violations_filter_ = 0;
   std::uint64_t armed_ticks_ = 0, motion_frames_ = 0, force_frames_ = 0, violations_ = 0, contact_ticks_ = 0;
   double sq_position_ = 0, sq_force_ = 0, contact_force_sum_ = 0;
+  std::uint64_t contact_onsets_ = 0;
+  bool touching_ = false;
 };
 
 }  // namespace lever::hil

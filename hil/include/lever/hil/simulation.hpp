@@ -108,6 +108,17 @@ struct SimResult {
   double prefilter_delay_ms = 0.0;    // the force prefilter's group delay at low frequencies, 1 / (2 pi f_c)
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
+  double contact_onsets_per_s = 0.0;  // the TOP's wall contact beginning, per armed second (RunMetrics)
+  // Passivity (zero while off): what each lever's controller dissipated over the run (re-arms included), the lowest
+  // observed energy seen while both were armed, and the energy frames both sent.
+  double hsi_dissipated_energy_j = 0.0, top_dissipated_energy_j = 0.0;
+  double hsi_min_observed_energy_j = 0.0, top_min_observed_energy_j = 0.0;
+  std::uint64_t energy_frames = 0;
+  // The levers' own protection tripping while the scenario ran (armed -> fault), injected faults included.
+  struct LeverFaults {
+    std::uint32_t count = 0;
+    protocol::FaultBits bits = 0;  // every fault latched at those transitions
+  } hsi_lever_faults, top_lever_faults;
   double bus_load_hsi = 0.0, bus_load_top = 0.0;
   std::uint64_t armed_ticks = 0;
   std::uint64_t motion_frames = 0, force_frames = 0;

@@ -33,6 +33,8 @@ struct Snapshot {
   std::uint64_t worst_step_ns = 0;
   std::uint64_t encoder_edges = 0;
   std::uint32_t encoder_illegal = 0, encoder_lost = 0;
+  fw::PassivityMode passivity = fw::PassivityMode::off;
+  double dissipated_energy_j = 0.0, observed_energy_j = 0.0;  // since the lever last armed
 };
 
 // What only a board has (a simulated lever reports null for each).
@@ -69,6 +71,9 @@ Snapshot snapshot(const Lever& lever, fw::Tick now) noexcept {
   s.encoder_edges = lever.decoder().edges();
   s.encoder_illegal = lever.decoder().illegal_transitions();
   s.encoder_lost = lever.decoder().lost_edges();
+  s.passivity = lever.config().passivity.mode;
+  s.dissipated_energy_j = t.dissipated_energy_j;
+  s.observed_energy_j = t.observed_energy_j;
   return s;
 }
 

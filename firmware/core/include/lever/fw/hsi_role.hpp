@@ -8,6 +8,7 @@
 #include "lever/fw/controllers.hpp"
 #include "lever/fw/data_channel.hpp"
 #include "lever/fw/lever_config.hpp"
+#include "lever/fw/passivity.hpp"
 #include "lever/fw/telemetry.hpp"
 #include "lever/protocol/messages.hpp"
 
@@ -29,7 +30,9 @@ class HsiRole {
         sender_(c.motion_codec, velocity_wire(), c.refresh_period),
         receiver_(force_wire()),
         stale_after_(2 * c.refresh_period),
-        motion_velocity_(c.motion_velocity) {}
+        motion_velocity_(c.motion_velocity),
+        passivity_(c.passivity),
+        arm_m_(c.display.lever_arm_m) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_hsi; }
   static constexpr bool uses_gauge(const LeverConfig& c) noexcept {
@@ -41,6 +44,8 @@ class HsiRole {
   constexpr Receiver& receiver() noexcept { return receiver_; }
   constexpr Sender& sender() noexcept { return sender_; }
   constexpr const ForceDisplay& display() const noexcept { return display_; }
+  constexpr const PassivityPort& passivity() const noexcept { return passivity_; }
+  constexpr PassivityPort& passivity() noexcept { return passivity_; }
 
   // A force frame for this pair. Returns the decode error, and in `used` whether it fed the model.
   protocol::DecodeError receive(const protocol::CanFrame& frame, Tick now, bool& used) noexcept {
@@ -55,13 +60,21 @@ class HsiRole {
     sender_.restart();
     receiver_.expire();
     display_.reset();
+    passivity_.on_armed();
   }
 
   // Torque while armed: the reconstructed force on the hand; nothing (zero force) while the stream is stale.
   double control(Tick now, double dt, LeverTelemetry& t) noexcept {
     t.remote = receiver_.value_at(now, stale_after_);
+    // The port's output is the displayed force: its torque (-F arm) on the lever moving at the lever's
+    // velocity is the power the channel gives the operator's side.
+    double force = t.remote.value_or(0.0);
+    force *= passivity_.limit(-force * arm_m_ * t.velocity_rad_s, dt);
+    if (t.remote) t.remote = force;
+    t.dissipated_energy_j = passivity_.state().dissipated_j;
+    t.observed_energy_j = passivity_.state().observed_j;
     const double* own = t.force_n ? &*t.force_n : nullptr;
-    return display_.update(t.remote.value_or(0.0), own, t.velocity_rad_s, dt);
+    return display_.update(force, own, t.velocity_rad_s, dt);
   }
 
   std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
@@ -89,6 +102,8 @@ class HsiRole {
   Tick stale_after_;
   MotionVelocity
       motion_velocity_;  // two refresh periods without data: the sender stopped, not merely stayed inside its deadband
+  PassivityPort passivity_;
+  double arm_m_;
 };
 
 }  // namespace lever::fw

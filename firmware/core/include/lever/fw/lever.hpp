@@ -180,6 +180,11 @@ class Lever {
       protocol::HeartbeatMessage m;
       error = protocol::decode(frame, m, address);
       if (error == protocol::DecodeError::none && address.role == Role::kPeer) on_peer_heartbeat(m, now);
+    } else if (address.kind == protocol::MessageKind::energy) {
+      if (address.role != Role::kPeer) return;  // this lever's own kind, from another node
+      protocol::EnergyMessage m;
+      error = protocol::decode(frame, m, address);
+      if (error == protocol::DecodeError::none) role_.passivity().receive(m);
     } else if (address.kind == protocol::MessageKind::command) {
       protocol::CommandMessage m;
       error = protocol::decode(frame, m, address);
@@ -341,6 +346,10 @@ class Lever {
     if (out->refresh) ++counters_.refresh_sent;
     telemetry_.sent_data = true;
     telemetry_.sent_refresh = out->refresh;
+    if (const auto energy = role_.passivity().frame(now, out->refresh)) {
+      send(protocol::pack(*energy, config_.pair, Role::kRole));
+      ++counters_.energy_sent;
+    }
   }
 
   void transmit_heartbeat() noexcept {

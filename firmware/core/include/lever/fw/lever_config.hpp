@@ -7,6 +7,7 @@
 #include "lever/codec/config.hpp"
 #include "lever/fw/controllers.hpp"
 #include "lever/fw/homing.hpp"
+#include "lever/fw/passivity.hpp"
 #include "lever/fw/quadrature_decoder.hpp"
 #include "lever/fw/step_timing.hpp"
 #include "lever/fw/strain_gauge.hpp"
@@ -56,6 +57,9 @@ struct LeverConfig {
   // Control.
   PositionController::Config position{};
   ForceDisplay::Config display{};
+  // Passivity under network delay (docs/firmware.md): off by default, as the paper's chain; the port's force
+  // arm is display.lever_arm_m on both levers.
+  PassivityConfig passivity{};
 
   // Safety.
   double torque_limit_nm = 1.0;        // never exceeded, whatever arrives on the bus
@@ -75,7 +79,8 @@ constexpr bool is_valid(const LeverConfig& c) noexcept {
          c.gauge.stale_after > 0 && c.gauge.tare_samples > 0 && c.timing.overrun_periods >= 1.0 &&
          c.timing.fault_after >= 1 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
          h.torque_limit_nm > 0 && h.torque_limit_nm <= c.torque_limit_nm && h.stall_ticks > 0 &&
-         std::isfinite(h.home_position_rad) && h.max_travel_rad > 0;
+         std::isfinite(h.home_position_rad) && h.max_travel_rad > 0 && is_valid(c.passivity) &&
+         c.display.lever_arm_m > 0;
 }
 
 }  // namespace lever::fw

@@ -8,6 +8,7 @@
 #include "lever/fw/controllers.hpp"
 #include "lever/fw/data_channel.hpp"
 #include "lever/fw/lever_config.hpp"
+#include "lever/fw/passivity.hpp"
 #include "lever/fw/telemetry.hpp"
 #include "lever/protocol/messages.hpp"
 
@@ -29,7 +30,9 @@ class TopRole {
         sender_(c.force_codec, force_wire(), c.refresh_period),
         receiver_(velocity_wire()),
         stale_after_(2 * c.refresh_period),
-        approach_speed_(c.position.approach_speed_rad_s) {}
+        approach_speed_(c.position.approach_speed_rad_s),
+        passivity_(c.passivity),
+        arm_m_(c.display.lever_arm_m) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_top; }
   static constexpr bool uses_gauge(const LeverConfig&) noexcept { return true; }
@@ -39,6 +42,8 @@ class TopRole {
   constexpr Receiver& receiver() noexcept { return receiver_; }
   constexpr Sender& sender() noexcept { return sender_; }
   constexpr const PositionController& controller() const noexcept { return controller_; }
+  constexpr const PassivityPort& passivity() const noexcept { return passivity_; }
+  constexpr PassivityPort& passivity() noexcept { return passivity_; }
 
   // A motion frame for this pair. The position rides on every velocity frame and resets the integrated
   // reference (paper section III-A).
@@ -62,6 +67,7 @@ class TopRole {
     tracked_ref_ = t.position_rad;
     have_motion_ = false;
     approaching_ = true;
+    passivity_.on_armed();
   }
 
   double control(Tick now, double dt, LeverTelemetry& t) noexcept {
@@ -85,8 +91,28 @@ class TopRole {
         approaching_ = false;  // caught up with the HSI's motion, not merely with its own start
       }
       if (approaching_) t.velocity_ref_rad_s = 0.0;
+      passive_ref_ = tracked_ref_;  // the passive reference starts where the approach ends
     }
-    if (!approaching_) tracked_ref_ = position_ref_;
+    if (!approaching_) {
+      // The port's output is the commanded velocity; with the measured contact force (x arm) it is the power
+      // the channel gives the wall's side.
+      const double force_nm = t.force_n.value_or(0.0) * arm_m_;
+      if (passivity_.config().mode == PassivityMode::tdpa) {
+        // The reference integrates the passive velocity instead of jumping to each frame's position: the HSI's
+        // position (position_ref_, reset by every motion frame) pulls it along through the same controller, so
+        // the drift the controller leaves is corrected only with energy the channel has.
+        double velocity = t.velocity_ref_rad_s + passivity_.config().drift_gain_per_s * (position_ref_ - passive_ref_);
+        velocity *= passivity_.limit(force_nm * velocity, dt);
+        passive_ref_ += velocity * dt;
+        t.velocity_ref_rad_s = velocity;
+        tracked_ref_ = passive_ref_;
+      } else {
+        passivity_.limit(force_nm * t.velocity_ref_rad_s, dt);
+        tracked_ref_ = position_ref_;
+      }
+    }
+    t.dissipated_energy_j = passivity_.state().dissipated_j;
+    t.observed_energy_j = passivity_.state().observed_j;
     t.position_ref_rad = tracked_ref_;
     return controller_.update(tracked_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
   }
@@ -116,6 +142,9 @@ class TopRole {
   double tracked_ref_ = 0.0;   // what the controller tracks
   bool have_motion_ = false;
   bool approaching_ = false;
+  PassivityPort passivity_;
+  double arm_m_;
+  double passive_ref_ = 0.0;  // tdpa: the reference the passive velocity integrates
 };
 
 }  // namespace lever::fw

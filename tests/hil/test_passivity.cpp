@@ -1,0 +1,167 @@
+// Time-domain passivity in the closed loop (docs/firmware.md, "Passivity under delay"): wall-tap over two sites
+// at 10, 25, 50 and 100 ms one-way delay, jitter a tenth of the delay, 1 % loss; with tdpa and without (observe:
+// the same control as off, with the observer running so that its energy can be read).
+//
+// Bounds, each fixed before the delayed runs were looked at:
+// - energy: after the controller acts, each port's observed energy is at least -1 uJ (one count of the energy
+//   field) at every armed tick; without tdpa, below -10 mJ somewhere (a tenth of the ~0.1 J a tap puts through
+//   a port);
+// - protection: no lever trips its own protection (TORQUE_LIMIT: the demand above the 1 N m limit for 250 ms;
+//   POSITION_LIMIT) while the scenario runs. The torque sent to the motor never exceeds the limit by
+//   construction (the clamp), so the bound is on what the controllers demand;
+// - position: once neither lever has felt a contact force for 1 s (five of the TOP's 200 ms drift time
+//   constants), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay earlier;
+// - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "lever/hil/simulation.hpp"
+
+using namespace lever;
+using namespace lever::hil;
+
+namespace {
+
+struct Outcome {
+  double min_observed_j[2] = {0.0, 0.0};  // HSI, TOP
+  double max_torque_nm = 0.0;             // sent to the motors
+  std::uint32_t lever_faults = 0;
+  double onsets_per_s = 0.0;
+  double max_drift_rad = 0.0;  // after the transient (above)
+  std::size_t drift_ticks = 0;
+};
+
+Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = 0.0, std::uint64_t seed = 3) {
+  SimConfig c;
+  c.scenario = ScenarioKind::wall_tap;
+  c.seed = seed;
+  c.duration_s = 20.0;
+  c.velocity_codec = {codec::Mode::deadband, 0.1, 0.0, 0.0};
+  c.force_codec = {codec::Mode::deadband, 0.1, 0.0, 0.0};
+  c.network.delay_ms = delay_ms;
+  c.network.jitter_ms = delay_ms / 10.0;
+  c.network.loss = delay_ms > 0.0 ? 0.01 : 0.0;
+  for (auto* fw : {&c.hsi_firmware, &c.top_firmware}) {
+    fw->comms_timeout = 300;  // the watchdog stays out of it, as in issue 14's runs
+    fw->passivity.mode = mode;
+    fw->passivity.reserve_j = reserve_j;
+  }
+  c.record_trace = true;
+  Outcome o;
+  c.observer = [&](const SimView& v) {
+    if (v.t < 0.0) return;
+    o.max_torque_nm =
+        std::max({o.max_torque_nm, std::fabs(v.hsi.telemetry().torque_nm), std::fabs(v.top.telemetry().torque_nm)});
+    if (!v.hsi.supervisor().armed() || !v.top.supervisor().armed()) return;
+    o.min_observed_j[0] = std::min(o.min_observed_j[0], v.hsi.telemetry().observed_energy_j);
+    o.min_observed_j[1] = std::min(o.min_observed_j[1], v.top.telemetry().observed_energy_j);
+  };
+  const auto r = run_simulation(c);
+  o.onsets_per_s = r.contact_onsets_per_s;
+  o.lever_faults = r.hsi_lever_faults.count + r.top_lever_faults.count;
+  const auto lag = static_cast<std::size_t>(r.nominal_delay_ticks);
+  std::size_t quiet = 0;
+  for (std::size_t k = 0; k < r.trace.size(); ++k) {
+    const auto& row = r.trace[k];
+    const bool felt = row.contact_force > 0.0 || std::fabs(row.displayed_force) > 0.1;
+    quiet = felt ? 0 : quiet + 1;
+    if (quiet <= 1000 || k < lag) continue;
+    ++o.drift_ticks;
+    o.max_drift_rad = std::max(o.max_drift_rad, std::fabs(row.top_angle - r.trace[k - lag].hsi_angle));
+  }
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("tdpa keeps each port passive under delay; without it the channel makes energy", "[hil][passivity]") {
+  const double limit = fw::LeverConfig{}.torque_limit_nm;
+  for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    const auto with = run(delay_ms, fw::PassivityMode::tdpa);
+    const auto without = run(delay_ms, fw::PassivityMode::observe);
+    CAPTURE(with.min_observed_j[0], with.min_observed_j[1], without.min_observed_j[0], without.min_observed_j[1]);
+    CAPTURE(with.max_drift_rad, with.drift_ticks, without.max_drift_rad, with.onsets_per_s, without.onsets_per_s);
+    for (int port = 0; port < 2; ++port) {
+      CHECK(with.min_observed_j[port] >= -1e-6);
+    }
+    // What tdpa buys: without it the channel puts out energy nobody put in.
+    CHECK(std::min(without.min_observed_j[0], without.min_observed_j[1]) < -0.010);
+    // The clamp, whatever the controllers demand.
+    CHECK(with.max_torque_nm <= limit);
+    CHECK(without.max_torque_nm <= limit);
+  }
+}
+
+// Not met (issue 14): with tdpa the TOP's reference falls behind the HSI's (the drift pull gets energy only from
+// the HSI's input, a round trip late) and pushes into the wall past the torque limit once the energy comes; the
+// HSI's displayed force is cut while the operator pulls back, and the hand pushes through. Measured (seed 3,
+// trips of both levers in 20 s): with tdpa 7, 19, 19, 17 at 10, 25, 50, 100 ms; without (observe) 27, 23, 55
+// at 25, 50, 100 ms. Catch's shouldfail: this fails once it is met.
+TEST_CASE("no lever trips its protection under delay with tdpa", "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    CHECK(run(delay_ms, fw::PassivityMode::tdpa).lever_faults == 0);
+  }
+}
+
+TEST_CASE("the baseline: without tdpa a lever trips its protection from 25 ms of delay on", "[hil][passivity]") {
+  CHECK(run(0.0, fw::PassivityMode::off).lever_faults == 0);
+  for (const double delay_ms : {25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    CHECK(run(delay_ms, fw::PassivityMode::observe).lever_faults > 0);
+  }
+}
+
+// Not met yet at 100 ms (29 mrad with tdpa; 11 mrad without): the drift pull needs energy the sparse
+// contact leaves little of. Catch's shouldfail: this fails once it is met at every delay.
+TEST_CASE("tdpa keeps the TOP within 10 mrad of the delayed HSI after the transient", "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms);
+    const auto with = run(delay_ms, fw::PassivityMode::tdpa);
+    REQUIRE(with.drift_ticks > 100);  // the scenario has quiet stretches (0.4 s or more) to judge the position in
+    CHECK(with.max_drift_rad <= 0.010);
+  }
+}
+
+// Not met yet (issue 14): at the first touch of each tap the TOP's velocity is held until the HSI's input
+// energy arrives, a round trip later; the reference stops at the wall's surface and the TOP grazes it several
+// times (4.4 onsets/s at 50 ms against 1.85 at zero delay). Catch's shouldfail: this fails once it is met.
+TEST_CASE("tdpa keeps contact onsets within twice the zero-delay run's", "[hil][passivity][!shouldfail]") {
+  const double reference = run(0.0, fw::PassivityMode::off).onsets_per_s;
+  for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
+    CAPTURE(delay_ms, reference);
+    CHECK(run(delay_ms, fw::PassivityMode::tdpa).onsets_per_s <= 2.0 * reference);
+  }
+}
+
+// Not a test: the table behind docs/firmware.md's choice of the reserve (`lever_tests_hil "[passivity-table]"`):
+// seeds 1-10: the lowest observed energy of either port, and the mean of the others.
+TEST_CASE("passivity table", "[.][passivity-table]") {
+  struct Variant {
+    const char* name;
+    fw::PassivityMode mode;
+    double reserve_j;
+  };
+  const Variant variants[] = {{"observe", fw::PassivityMode::observe, 0.0},
+                              {"tdpa", fw::PassivityMode::tdpa, 0.0},
+                              {"tdpa reserve 12.5 mJ", fw::PassivityMode::tdpa, 0.0125}};
+  for (const auto& variant : variants) {
+    for (const double delay_ms : {0.0, 10.0, 25.0, 50.0, 100.0}) {
+      double observed = 0.0, onsets = 0.0, trips = 0.0, drift = 0.0;
+      constexpr int kSeeds = 10;
+      for (int seed = 1; seed <= kSeeds; ++seed) {
+        const auto o = run(delay_ms, variant.mode, variant.reserve_j, static_cast<std::uint64_t>(seed));
+        observed = std::min({observed, o.min_observed_j[0], o.min_observed_j[1]});
+        onsets += o.onsets_per_s / kSeeds;
+        trips += o.lever_faults / static_cast<double>(kSeeds);
+        drift += 1e3 * o.max_drift_rad / kSeeds;
+      }
+      std::printf("| %s | %.0f ms | %.3f J | %.2f | %.1f | %.1f mrad |\n", variant.name, delay_ms, observed, onsets,
+                  trips, drift);
+    }
+  }
+  SUCCEED();
+}
