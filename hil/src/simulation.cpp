@@ -15,7 +15,7 @@
 namespace lever::hil {
 namespace {
 
-// A lever's dissipated energy over the run, from its telemetry's count since it last armed.
+// A lever's dissipated energy over the run, from its passivity port's count since it last armed.
 struct RunningTotal {
   double last_j = 0.0;
   double total_j = 0.0;
@@ -385,7 +385,6 @@ SimResult run_simulation(const SimConfig& config) {
       return measured_history[static_cast<std::size_t>(k) % measured_history.size()];
     };
     slot(tick) = both_armed ? tt.force_n : std::nullopt;
-    // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
     // Every fault a lever latched while the scenario ran, injected or not: a delayed loop that trips a
     // lever's own protection (TORQUE_LIMIT, POSITION_LIMIT) has not survived the delay, whatever else it did.
     for (int i = 0; i < 2; ++i) {
@@ -398,7 +397,8 @@ SimResult run_simulation(const SimConfig& config) {
       }
       was_armed[i] = armed;
     }
-    // (From the ports themselves: the telemetry holds it only on the ticks the controllers run.)
+    // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
+    // It is read from the ports themselves: the telemetry holds it only on the ticks the controllers run.
     dissipated[0].add(hl.role().passivity().state().dissipated_j);
     dissipated[1].add(tl.role().passivity().state().dissipated_j);
     if (both_armed) {
