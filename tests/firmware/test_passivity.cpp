@@ -54,8 +54,8 @@ TEST_CASE("a newer epoch restarts the account; an older one is dropped", "[passi
 }
 
 TEST_CASE("tdpa never puts out more energy than the peer put in; observe only watches", "[passivity]") {
-  PassivityPort tdpa({PassivityMode::tdpa, 5.0});
-  PassivityPort observe({PassivityMode::observe, 5.0});
+  PassivityPort tdpa({PassivityMode::tdpa, 5.0, 0.0});
+  PassivityPort observe({PassivityMode::observe, 5.0, 0.0});
   for (auto* port : {&tdpa, &observe}) {
     port->on_armed();
     port->receive(joules(0.0));
@@ -78,7 +78,7 @@ TEST_CASE("tdpa never puts out more energy than the peer put in; observe only wa
 }
 
 TEST_CASE("input energy goes to the peer in the next energy frame, rounded down to the microjoule", "[passivity]") {
-  PassivityPort port({PassivityMode::tdpa, 5.0});
+  PassivityPort port({PassivityMode::tdpa, 5.0, 0.0});
   port.on_armed();
   port.limit(-1.5, 1e-3);
   const auto frame = port.frame(100, false);
@@ -90,7 +90,7 @@ TEST_CASE("input energy goes to the peer in the next energy frame, rounded down 
 }
 
 TEST_CASE("tdpa lets out exactly the energy left, not more, on the tick the budget runs out", "[passivity]") {
-  PassivityPort port({PassivityMode::tdpa, 5.0});
+  PassivityPort port({PassivityMode::tdpa, 5.0, 0.0});
   port.on_armed();
   port.receive(joules(0.0));
   port.receive(joules(0.003));          // 3 mJ
@@ -103,6 +103,33 @@ TEST_CASE("tdpa lets out exactly the energy left, not more, on the tick the budg
   // Energy this side puts in is not the budget: only the peer's counts.
   port.limit(-5.0, 1e-3);
   CHECK(port.limit(2.0, 1e-3) == 0.0);
+}
+
+// The reserve is an account the port's own input refills: a hand that yields to the display (output) and pushes
+// back (input) over and over spends the same millijoules, and only input beyond a full reserve goes to the peer.
+TEST_CASE("the reserve refills from the port's own input before anything more is passed", "[passivity]") {
+  PassivityPort port({PassivityMode::tdpa, 5.0, 0.010});
+  port.on_armed();
+  port.receive(joules(0.0));
+  port.limit(-15.0, 1e-3);  // 15 mJ in: 10 mJ kept, 5 mJ passed
+  CHECK(port.state().passed_j == Approx(0.005).margin(1e-12));
+  CHECK(port.state().observed_j == Approx(0.010).margin(1e-12));
+  for (int cycle = 0; cycle < 100; ++cycle) {
+    CAPTURE(cycle);
+    CHECK(port.limit(8.0, 1e-3) == 1.0);  // yields: 8 mJ out of the reserve
+    port.limit(-8.0, 1e-3);               // pushes back: the same 8 mJ in, kept
+  }
+  CHECK(port.state().passed_j == Approx(0.005).margin(1e-9));
+  CHECK(port.state().dissipated_j == 0.0);
+  port.limit(-4.0, 1e-3);  // beyond a full reserve: passed on
+  CHECK(port.state().passed_j == Approx(0.009).margin(1e-9));
+  // Spent is spent: output beyond the reserve is cut, and what was passed is not taken back.
+  CHECK(port.limit(20.0, 1e-3) == Approx(0.5).margin(1e-9));
+  CHECK(port.state().passed_j == Approx(0.009).margin(1e-9));
+  // The peer's energy is spent here or kept, never bounced back.
+  port.receive(joules(0.050));
+  CHECK(port.state().passed_j == Approx(0.009).margin(1e-9));
+  CHECK(port.state().observed_j == Approx(0.050).margin(1e-9));
 }
 
 // Two ports joined by a delayed, lossy link, driven by random power at both ends: whatever each port keeps of

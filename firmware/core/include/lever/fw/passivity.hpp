@@ -31,8 +31,10 @@ struct PassivityConfig {
   double drift_gain_per_s = 5.0;
   // Of its own input energy, the port keeps up to this much for its own output instead of passing it to the
   // peer (docs/firmware.md, "Local reserve"). 0 is the per-port TDPA of the literature: every joule that comes
-  // in goes to the peer, and a port puts out only what the peer passed.
-  double reserve_j = 0.0;
+  // in goes to the peer, and a port puts out only what the peer passed. 12.5 mJ is tau_max^2 / (2 k_p), what the
+  // TOP's position spring (40 N m/rad) holds at the 1 N m torque limit: the most a press against a stiff wall
+  // stores, so a hand that yields to the whole of a press and comes back is paid from the port's own account.
+  double reserve_j = 0.0125;
 };
 
 constexpr bool is_valid(const PassivityConfig& c) noexcept {
@@ -79,6 +81,7 @@ class PassivityPort {
     double output_j = 0.0;      // out of the channel through this port, after the controller
     double received_j = 0.0;    // what the peer port passed to this one, as received
     double passed_j = 0.0;      // of input_j, what this port passed to the peer (all of it but the reserve)
+    double kept_j = 0.0;        // of input_j, what the port holds for its own output: at most the reserve
     double dissipated_j = 0.0;  // what the controller took out
     // received + input - passed - output: the energy this port may still put out. Kept at or above zero by
     // tdpa at both ports, the channel's own energy (both inputs less both outputs) is too: each port puts out
@@ -92,6 +95,7 @@ class PassivityPort {
   constexpr const PassivityConfig& config() const noexcept { return config_; }
   constexpr const State& state() const noexcept { return state_; }
   constexpr bool enabled() const noexcept { return config_.mode != PassivityMode::off; }
+  constexpr bool acts() const noexcept { return config_.mode == PassivityMode::tdpa; }
 
   // This lever armed: a new epoch of its own account, and the peer's energy counts from its next frame.
   constexpr void on_armed() noexcept {
@@ -109,7 +113,7 @@ class PassivityPort {
       state_.output_j = 0.0;
     }
     state_.received_j = received_.energy_j();
-    settle();
+    state_.observed_j = available();
   }
 
   // out_w: the power this tick's output would carry out of the channel into this lever's side (negative: the
@@ -120,19 +124,20 @@ class PassivityPort {
     if (!enabled() || !(out_w == out_w)) return 1.0;
     const double requested = out_w * dt;
     if (requested <= 0.0) {
-      state_.input_j -= requested;
+      take_in(-requested);
     } else {
       const double budget = available();
-      if (config_.mode == PassivityMode::tdpa && requested > budget) {
-        const double allowed = budget > 0.0 ? budget : 0.0;
+      double allowed = requested;
+      if (acts() && requested > budget) {
+        allowed = budget > 0.0 ? budget : 0.0;
         state_.scale = allowed / requested;
         state_.dissipated_j += requested - allowed;
-        state_.output_j += allowed;
-      } else {
-        state_.output_j += requested;
       }
+      state_.output_j += allowed;
+      // The port's own kept input goes first, so the peer's energy waits for when the reserve has run out.
+      state_.kept_j = state_.kept_j > allowed ? state_.kept_j - allowed : 0.0;
     }
-    settle();
+    state_.observed_j = available();
     return state_.scale;
   }
 
@@ -152,14 +157,23 @@ class PassivityPort {
   constexpr double available() const noexcept {
     return state_.received_j + state_.input_j - state_.passed_j - state_.output_j;
   }
-  // Passes the input beyond the reserve on; what it passes only grows. Under tdpa this never passes energy the
-  // port has already put out: its output is bounded by `available`, so what it kept of its own input, input -
-  // passed, is all it can have spent of it, and that is at most the reserve. Under observe the output is not
-  // bounded, and the input still goes on as it came, so the peer's observer sees the channel as it is.
-  constexpr void settle() noexcept {
-    const double target = state_.input_j - config_.reserve_j;
-    if (target > state_.passed_j) state_.passed_j = target;
-    state_.observed_j = available();
+  // Under tdpa the input refills the port's reserve first and only what overflows it goes to the peer, so a
+  // hand that yields to the display and pushes back spends and refills the same few millijoules instead of
+  // handing each push-back to the peer, a round trip away from coming back. Only the port's own input is ever
+  // passed (the peer's energy is spent here, never bounced back), and never energy the port has put out: kept
+  // shrinks with every output. Under observe the output is not bounded, and the input goes on as it came (all
+  // of it beyond the reserve), so the peer's observer sees the channel as it is.
+  constexpr void take_in(double energy_j) noexcept {
+    state_.input_j += energy_j;
+    if (acts()) {
+      const double room = config_.reserve_j - state_.kept_j;
+      const double keep = room <= 0.0 ? 0.0 : energy_j < room ? energy_j : room;
+      state_.kept_j += keep;
+      state_.passed_j += energy_j - keep;
+    } else {
+      const double target = state_.input_j - config_.reserve_j;
+      if (target > state_.passed_j) state_.passed_j = target;
+    }
   }
 
   PassivityConfig config_;
