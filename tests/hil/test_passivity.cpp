@@ -33,7 +33,8 @@ struct Outcome {
   std::size_t drift_ticks = 0;
 };
 
-Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = 0.0, std::uint64_t seed = 3) {
+Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::PassivityConfig{}.reserve_j,
+            std::uint64_t seed = 3) {
   SimConfig c;
   c.scenario = ScenarioKind::wall_tap;
   c.seed = seed;
@@ -95,22 +96,32 @@ TEST_CASE("tdpa keeps each port passive under delay; without it the channel make
   }
 }
 
-// The unmet bounds (issue 14) are checked on seeds 1-5 at every delay: each is met only when it holds for every
-// seed, so a different trajectory (another seed, another CPU's libm) does not meet it by chance. Their means
-// over seeds 1-10 are in docs/firmware.md, "Passivity under delay". Catch's shouldfail: each of these fails once
-// it is met.
+// The bounds are checked on seeds 1-5: each counts as met at a delay only when it holds for every seed there, so
+// a different trajectory (another seed, another CPU's libm) does not meet it by chance. The means over seeds
+// 1-10 are in docs/firmware.md, "Passivity under delay". Where a bound is not met the test carries Catch's
+// shouldfail, so it fails once the bound is met and the test can move over.
 constexpr std::uint64_t kSeeds[] = {1, 2, 3, 4, 5};
 constexpr double kDelaysMs[] = {10.0, 25.0, 50.0, 100.0};
+const double kReserveJ = fw::PassivityConfig{}.reserve_j;
 
-// Not met: with tdpa the TOP's reference falls behind the HSI's (the drift pull gets energy only from the HSI's
-// input, a round trip late) and pushes into the wall past the torque limit once the energy comes; the HSI's
-// displayed force is cut while the operator pulls back, and the hand pushes through (2.1-51.8 trips per 20 s).
-TEST_CASE("no lever trips its protection under delay with tdpa", "[hil][passivity][!shouldfail]") {
-  for (const double delay_ms : kDelaysMs) {
+Outcome tdpa_run(double delay_ms, std::uint64_t seed) {
+  return run(delay_ms, fw::PassivityMode::tdpa, kReserveJ, seed);
+}
+
+TEST_CASE("with tdpa no lever trips its protection at 10, 25 and 50 ms", "[hil][passivity]") {
+  for (const double delay_ms : {10.0, 25.0, 50.0}) {
     for (const auto seed : kSeeds) {
       CAPTURE(delay_ms, seed);
-      CHECK(run(delay_ms, fw::PassivityMode::tdpa, 0.0, seed).lever_faults == 0);
+      CHECK(tdpa_run(delay_ms, seed).lever_faults == 0);
     }
+  }
+}
+
+// Not met at 100 ms (5.2 TORQUE_LIMIT trips per 20 s over seeds 1-10, at the TOP); not traced yet.
+TEST_CASE("with tdpa no lever trips its protection at 100 ms", "[hil][passivity][!shouldfail]") {
+  for (const auto seed : kSeeds) {
+    CAPTURE(seed);
+    CHECK(tdpa_run(100.0, seed).lever_faults == 0);
   }
 }
 
@@ -131,31 +142,48 @@ TEST_CASE("every delayed tdpa run has quiet stretches to judge the drift in", "[
   for (const double delay_ms : kDelaysMs) {
     for (const auto seed : kSeeds) {
       CAPTURE(delay_ms, seed);
-      CHECK(run(delay_ms, fw::PassivityMode::tdpa, 0.0, seed).drift_ticks > 100);
+      CHECK(tdpa_run(delay_ms, seed).drift_ticks > 100);
     }
   }
 }
 
-// Not met: the drift pull needs energy the sparse contact leaves little of (22-90 mrad).
-TEST_CASE("tdpa keeps the TOP within 10 mrad of the delayed HSI after the transient", "[hil][passivity][!shouldfail]") {
-  for (const double delay_ms : kDelaysMs) {
+bool drift_within_bound(double delay_ms, std::uint64_t seed) {
+  const auto o = tdpa_run(delay_ms, seed);
+  CAPTURE(delay_ms, seed, o.max_drift_rad);
+  return o.max_drift_rad <= 0.010;
+}
+
+bool onsets_within_bound(double delay_ms, std::uint64_t seed) {
+  const double reference = run(0.0, fw::PassivityMode::off, 0.0, seed).onsets_per_s;
+  const double onsets = tdpa_run(delay_ms, seed).onsets_per_s;
+  CAPTURE(delay_ms, seed, reference, onsets);
+  return onsets <= 2.0 * reference;
+}
+
+TEST_CASE("at 10 and 25 ms tdpa keeps the TOP within 10 mrad of the delayed HSI, and the contact from chattering",
+          "[hil][passivity]") {
+  for (const double delay_ms : {10.0, 25.0}) {
     for (const auto seed : kSeeds) {
-      CAPTURE(delay_ms, seed);
-      CHECK(run(delay_ms, fw::PassivityMode::tdpa, 0.0, seed).max_drift_rad <= 0.010);
+      CHECK(drift_within_bound(delay_ms, seed));
+      CHECK(onsets_within_bound(delay_ms, seed));
     }
   }
 }
 
-// Not met: at the first touch of each tap the TOP's velocity is held until the HSI's input energy arrives, a
-// round trip later; the reference stops at the wall's surface and the TOP bounces on it (2.78-4.93 onsets/s
-// against 2.09 at zero delay).
-TEST_CASE("tdpa keeps contact onsets within twice the zero-delay run's", "[hil][passivity][!shouldfail]") {
-  for (const auto seed : kSeeds) {
-    const double reference = run(0.0, fw::PassivityMode::off, 0.0, seed).onsets_per_s;
-    for (const double delay_ms : kDelaysMs) {
-      CAPTURE(delay_ms, seed, reference);
-      CHECK(run(delay_ms, fw::PassivityMode::tdpa, 0.0, seed).onsets_per_s <= 2.0 * reference);
-    }
+// Not met at 50 and 100 ms (means over seeds 1-10: drift 6.7 and 12.3 mrad; 6.1 and 6.3 onsets/s against 2.2 at
+// zero delay). The chatter, as traced: while a press's energy is a round trip away the TOP presses lightly, and
+// the torque steps of its velocity reference (the HSI's velocity is one encoder count per tick) lift it off the
+// wall. The drift left at 50 ms on some seeds has not been traced yet.
+TEST_CASE("at 50 and 100 ms tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {50.0, 100.0}) {
+    for (const auto seed : kSeeds) CHECK(drift_within_bound(delay_ms, seed));
+  }
+}
+
+TEST_CASE("at 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's",
+          "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {50.0, 100.0}) {
+    for (const auto seed : kSeeds) CHECK(onsets_within_bound(delay_ms, seed));
   }
 }
 
@@ -167,9 +195,9 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
     fw::PassivityMode mode;
     double reserve_j;
   };
-  const Variant variants[] = {{"observe", fw::PassivityMode::observe, 0.0},
-                              {"tdpa", fw::PassivityMode::tdpa, 0.0},
-                              {"tdpa reserve 12.5 mJ", fw::PassivityMode::tdpa, 0.0125}};
+  const Variant variants[] = {{"without", fw::PassivityMode::observe, 0.0},
+                              {"tdpa, no reserve", fw::PassivityMode::tdpa, 0.0},
+                              {"tdpa", fw::PassivityMode::tdpa, fw::PassivityConfig{}.reserve_j}};
   for (const auto& variant : variants) {
     for (const double delay_ms : {0.0, 10.0, 25.0, 50.0, 100.0}) {
       double observed = 0.0, onsets = 0.0, trips = 0.0, drift = 0.0;

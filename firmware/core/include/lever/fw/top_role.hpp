@@ -32,7 +32,8 @@ class TopRole {
         stale_after_(2 * c.refresh_period),
         approach_speed_(c.position.approach_speed_rad_s),
         passivity_(c.passivity),
-        arm_m_(c.display.lever_arm_m) {}
+        arm_m_(c.display.lever_arm_m),
+        contact_threshold_nm_(c.display.contact_threshold_n * c.display.lever_arm_m) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_top; }
   static constexpr bool uses_gauge(const LeverConfig&) noexcept { return true; }
@@ -95,13 +96,21 @@ class TopRole {
     }
     if (!approaching_) {
       // The port's output is the commanded velocity; with the measured contact force (x arm) it is the power
-      // the channel gives the wall's side.
-      const double force_nm = t.force_n.value_or(0.0) * arm_m_;
+      // the channel gives the wall's side. A reading within the contact threshold (0.1 N, twenty times the
+      // gauge's filtered noise) is no contact: the lever pushes on nothing, and counting gauge noise as force
+      // would charge free motion for energy it does not carry. What that leaves out, at most the threshold
+      // times the travel while pressing that lightly, is under a microjoule against the 20 kN/m wall.
+      const double gauge_nm = t.force_n.value_or(0.0) * arm_m_;
+      const bool in_contact = gauge_nm > contact_threshold_nm_ || gauge_nm < -contact_threshold_nm_;
+      const double force_nm = in_contact ? gauge_nm : 0.0;
       if (passivity_.config().mode == PassivityMode::tdpa) {
-        // The reference integrates the passive velocity instead of jumping to each frame's position: the HSI's
-        // position (position_ref_, reset by every motion frame) pulls it along through the same controller, so
-        // the drift the controller leaves is corrected only with energy the channel has.
-        double velocity = t.velocity_ref_rad_s + passivity_.config().drift_gain_per_s * (position_ref_ - passive_ref_);
+        // The reference integrates the passive velocity instead of jumping to each frame's position. Out of
+        // contact the HSI's position (position_ref_, reset by every motion frame) pulls it along, which closes
+        // the drift the controller left; in contact it does not, because there the drift is the depth the HSI
+        // went past the wall while the TOP had no energy to follow, and pulling the TOP that deep would press
+        // the wall far harder than the force the operator feels (past the torque limit, as measured).
+        const double pull = in_contact ? 0.0 : passivity_.config().drift_gain_per_s;
+        double velocity = t.velocity_ref_rad_s + pull * (position_ref_ - passive_ref_);
         velocity *= passivity_.limit(force_nm * velocity, dt);
         passive_ref_ += velocity * dt;
         t.velocity_ref_rad_s = velocity;
@@ -144,6 +153,7 @@ class TopRole {
   bool approaching_ = false;
   PassivityPort passivity_;
   double arm_m_;
+  double contact_threshold_nm_;
   double passive_ref_ = 0.0;  // tdpa: the reference the passive velocity integrates
 };
 
