@@ -99,7 +99,7 @@ set multiplot layout 1,2 title "contact against delay\n" . spread
 set title "chatter: the TOP's wall contact beginning"
 set ylabel "contact onsets per second"
 plot {10}
-set title "the levers' protection tripping (TORQUE_LIMIT, POSITION_LIMIT, PEER_STATE)"
+set title "protection trips (TORQUE_LIMIT, POSITION_LIMIT, PEER_STATE)"
 set ylabel "armed -> fault, both levers, per run"
 plot {11}
 unset multiplot
