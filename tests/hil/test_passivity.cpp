@@ -117,12 +117,18 @@ TEST_CASE("with tdpa no lever trips its protection at 10, 25 and 50 ms", "[hil][
   }
 }
 
-// Not met at 100 ms (5.2 TORQUE_LIMIT trips per 20 s over seeds 1-10, at the TOP); not traced yet.
-TEST_CASE("with tdpa no lever trips its protection at 100 ms", "[hil][passivity][!shouldfail]") {
+// Not met at 100 ms, and not testable per seed: 2 of seeds 1-10 trip on x86-64 (seed 3 five times, seed 10 in a
+// cascade of 47 armed->fault transitions), none under arm64's libm, whose trajectories differ. What tdpa buys there
+// is checked instead: against the loop without it (about 75 trips per run).
+TEST_CASE("at 100 ms tdpa trips the protection far less often than the loop without it", "[hil][passivity]") {
+  std::uint32_t with = 0, without = 0;
   for (const auto seed : kSeeds) {
-    CAPTURE(seed);
-    CHECK(tdpa_run(100.0, seed).lever_faults == 0);
+    with += tdpa_run(100.0, seed).lever_faults;
+    without += run(100.0, fw::PassivityMode::observe, 0.0, seed).lever_faults;
   }
+  CAPTURE(with, without);
+  CHECK(without > 0);
+  CHECK(4 * with <= without);
 }
 
 TEST_CASE("the baseline: without tdpa the levers trip their protection from 25 ms of delay on", "[hil][passivity]") {
@@ -158,17 +164,22 @@ void check_drift_and_chatter(double delay_ms, bool drift, bool chatter) {
   }
 }
 
-TEST_CASE("at 10 and 25 ms tdpa keeps the TOP within 10 mrad of the delayed HSI, and the contact from chattering",
-          "[hil][passivity]") {
-  for (const double delay_ms : {10.0, 25.0}) check_drift_and_chatter(delay_ms, true, true);
+TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity]") {
+  check_drift_and_chatter(10.0, true, false);
 }
 
-// Not met at 50 and 100 ms (means over seeds 1-10: drift 6.7 and 12.3 mrad; 6.1 and 6.3 onsets/s against 2.2 at
-// zero delay). The chatter, as traced (docs/firmware.md): a fast tap spends the TOP's reserve in a few ms of
-// impact, the reference stops at the surface with nothing to press on, and the lever rattles on the wall until
-// the press's energy arrives a round trip later. The drift left on some seeds has not been traced yet.
-TEST_CASE("at 50 and 100 ms tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity][!shouldfail]") {
-  for (const double delay_ms : {50.0, 100.0}) check_drift_and_chatter(delay_ms, true, false);
+TEST_CASE("at 10 and 25 ms tdpa keeps contact onsets within twice the zero-delay run's", "[hil][passivity]") {
+  for (const double delay_ms : {10.0, 25.0}) check_drift_and_chatter(delay_ms, false, true);
+}
+
+// Not met. Drift, from 25 ms on (means over seeds 1-10: 3.8, 6.7 and 12.3 mrad at 25, 50 and 100 ms; at 25 ms
+// seeds 1-5 stay within the bound on x86-64, seed 5 under arm64's libm does not, 11.6 mrad): the drift left on
+// some trajectories has not been traced yet. Chatter, at 50 and 100 ms (6.1 and 6.3 onsets/s against 2.2 at zero
+// delay), as traced (docs/firmware.md): a fast tap spends the TOP's reserve in a few ms of impact, the reference
+// stops at the surface with nothing to press on, and the lever rattles on the wall until the press's energy
+// arrives a round trip later.
+TEST_CASE("from 25 ms on tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : {25.0, 50.0, 100.0}) check_drift_and_chatter(delay_ms, true, false);
 }
 
 TEST_CASE("at 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's",
