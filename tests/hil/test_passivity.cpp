@@ -31,6 +31,9 @@ struct Outcome {
   double onsets_per_s = 0.0;
   double max_drift_rad = 0.0;  // after the transient (above)
   std::size_t drift_ticks = 0;
+  // The same, only while both levers are at rest (the HSI then and one delay earlier, the TOP over the last
+  // 10 ms, all below 0.05 rad/s): the offset the passivity controller leaves, without free motion's tracking.
+  double max_rest_offset_rad = 0.0;
 };
 
 Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::PassivityConfig{}.reserve_j,
@@ -70,7 +73,12 @@ Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::Pass
     quiet = felt ? 0 : quiet + 1;
     if (quiet <= 1000 || k < lag) continue;
     ++o.drift_ticks;
-    o.max_drift_rad = std::max(o.max_drift_rad, std::fabs(row.top_angle - r.trace[k - lag].hsi_angle));
+    const double offset = std::fabs(row.top_angle - r.trace[k - lag].hsi_angle);
+    o.max_drift_rad = std::max(o.max_drift_rad, offset);
+    const bool at_rest = k >= 10 && std::fabs(row.hsi_velocity) < 0.05 &&
+                         std::fabs(r.trace[k - lag].hsi_velocity) < 0.05 &&
+                         std::fabs(row.top_angle - r.trace[k - 10].top_angle) < 0.05 * 0.010;
+    if (at_rest) o.max_rest_offset_rad = std::max(o.max_rest_offset_rad, offset);
   }
   return o;
 }
@@ -201,7 +209,7 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
                               {"tdpa", fw::PassivityMode::tdpa, fw::PassivityConfig{}.reserve_j}};
   for (const auto& variant : variants) {
     for (const double delay_ms : {0.0, 10.0, 25.0, 50.0, 100.0}) {
-      double observed = 0.0, onsets = 0.0, trips = 0.0, drift = 0.0;
+      double observed = 0.0, onsets = 0.0, trips = 0.0, drift = 0.0, rest = 0.0, rest_max = 0.0;
       constexpr int kTableSeeds = 10;
       for (int seed = 1; seed <= kTableSeeds; ++seed) {
         const auto o = run(delay_ms, variant.mode, variant.reserve_j, static_cast<std::uint64_t>(seed));
@@ -209,9 +217,11 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
         onsets += o.onsets_per_s / kTableSeeds;
         trips += o.lever_faults / static_cast<double>(kTableSeeds);
         drift += 1e3 * o.max_drift_rad / kTableSeeds;
+        rest += 1e3 * o.max_rest_offset_rad / kTableSeeds;
+        rest_max = std::max(rest_max, 1e3 * o.max_rest_offset_rad);
       }
-      std::printf("| %s | %.0f ms | %.3f J | %.2f | %.1f | %.1f mrad |\n", variant.name, delay_ms, observed, onsets,
-                  trips, drift);
+      std::printf("| %s | %.0f ms | %.3f J | %.2f | %.1f | %.1f mrad | %.1f mrad (%.1f) |\n", variant.name, delay_ms,
+                  observed, onsets, trips, drift, rest, rest_max);
     }
   }
   SUCCEED();
