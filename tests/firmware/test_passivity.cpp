@@ -2,6 +2,7 @@
 // accidents, and the controller's bound.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 
@@ -103,6 +104,42 @@ TEST_CASE("tdpa lets out exactly the energy left, not more, on the tick the budg
   // Energy this side puts in is not the budget: only the peer's counts.
   port.limit(-5.0, 1e-3);
   CHECK(port.limit(2.0, 1e-3) == 0.0);
+}
+
+// The display's spending spread over a time constant (PassivityConfig::display_spend_time_s): a hand that has
+// pushed into the display and then yields. Spent at once, the whole force goes out until the account is empty and
+// then none; spread, each tick spends a fixed share of what is held, so the force fades and the account never
+// lets out more than the cut at once would.
+TEST_CASE("spread over a time constant, the port spends a share of what it holds each tick and the force fades",
+          "[passivity]") {
+  constexpr double kDt = 1e-3, kPower = 0.05;  // 50 mW: 9 N at the 0.1 m handle, yielding at 0.055 rad/s
+  for (const double spend_s : {0.0, 0.040}) {
+    CAPTURE(spend_s);
+    PassivityPort port({PassivityMode::tdpa, 5.0, 0.0125, spend_s});
+    port.on_armed();
+    port.receive(joules(0.0));
+    for (int tick = 0; tick < 20; ++tick) port.limit(-kPower, kDt, spend_s);  // pushes in: 1 mJ kept
+    const double held = port.state().observed_j;
+    REQUIRE(held == Approx(0.001).margin(1e-12));
+    double out = 0.0, previous = 1.0, largest_drop = 0.0;
+    for (int tick = 0; tick < 60; ++tick) {
+      const double scale = port.limit(kPower, kDt, spend_s);  // yields
+      out += scale * kPower * kDt;
+      largest_drop = std::max(largest_drop, previous - scale);
+      previous = scale;
+    }
+    CHECK(out <= held + 1e-12);
+    CHECK(port.state().observed_j >= -1e-12);
+    if (spend_s == 0.0) {
+      CHECK(largest_drop == Approx(1.0).margin(1e-9));  // the whole force, then none
+      CHECK(port.state().observed_j == Approx(0.0).margin(1e-12));
+    } else {
+      // First tick: 1 mJ x (1 ms / 40 ms) = 25 uJ of the 50 uJ asked; then 2.5 % less each tick.
+      CHECK(largest_drop == Approx(0.5).margin(1e-9));
+      CHECK(previous == Approx(0.5 * std::pow(1.0 - kDt / spend_s, 59)).epsilon(1e-9));
+      CHECK(port.state().observed_j == Approx(0.001 * std::pow(1.0 - kDt / spend_s, 60)).epsilon(1e-9));
+    }
+  }
 }
 
 // The reserve is an account the port's own input refills: a hand that yields to the display (output) and pushes

@@ -182,6 +182,8 @@ ConfigSchema schema_for(FwConfig& config) {
            "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
   s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",
            "of the port's own input, what it keeps for its own output (0: the literature's per-port TDPA)");
+  s.number("control.passivity.display_spend_time_s", l.passivity.display_spend_time_s, 0.0, 10.0, "s",
+           "HSI with tdpa: spend the port's energy over this time constant (0: all at once)");
 
   s.number("safety.torque_limit_nm", l.torque_limit_nm, 1e-3, 100.0, "N m", "never exceeded");
   s.integer("safety.torque_saturation_ms", l.torque_saturation_ticks, 1, 60000, "ms",

@@ -69,7 +69,7 @@ class HsiRole {
     // The port's output is the displayed force: its torque (-F arm) on the lever moving at the lever's
     // velocity is the power the channel gives the operator's side.
     double force = t.remote.value_or(0.0);
-    force *= passivity_.limit(-force * arm_m_ * t.velocity_rad_s, dt);
+    force *= passivity_.limit(-force * arm_m_ * t.velocity_rad_s, dt, passivity_.config().display_spend_time_s);
     if (t.remote) t.remote = force;
     t.dissipated_energy_j = passivity_.state().dissipated_j;
     t.observed_energy_j = passivity_.state().observed_j;

@@ -35,11 +35,21 @@ struct PassivityConfig {
   // TOP's position spring (40 N m/rad) holds at the 1 N m torque limit: the most a press against a stiff wall
   // stores, so a hand that yields to the whole of a press and comes back is paid from the port's own account.
   double reserve_j = 0.0125;
+  // HSI: the display spends the energy its port holds at most at the rate (held energy) / (this time), instead of
+  // all of it on the tick it is asked for. Spent at once, the account is empty soon after the hand starts to yield,
+  // and the displayed force then switches whole on the sign of the hand's velocity: all of it while the hand
+  // pushes in, none while it yields (traced for a hand near rest against a press: every 20-30 ms). Spread out,
+  // the account drains exponentially and always holds something: the force allowed is held / (time x arm x
+  // speed), whole near rest and less the faster the hand yields. 40 ms is the time constant of the hand on the
+  // lever, 1 / sqrt(3 N m/rad / 5e-3 kg m^2) (docs/hil-model.md): a fade the hand can follow. 0 spends at once (the
+  // literature's controller). The TOP always spends at once: its impact on the wall needs its reserve within a
+  // few milliseconds (measured: spreading it too raised the contact onsets; docs/firmware.md).
+  double display_spend_time_s = 0.040;
 };
 
 constexpr bool is_valid(const PassivityConfig& c) noexcept {
   return c.mode <= PassivityMode::tdpa && c.drift_gain_per_s >= 0.0 && c.drift_gain_per_s < 1000.0 &&
-         c.reserve_j >= 0.0 && c.reserve_j < 1000.0;
+         c.reserve_j >= 0.0 && c.reserve_j < 1000.0 && c.display_spend_time_s >= 0.0 && c.display_spend_time_s <= 10.0;
 }
 
 // The peer's input energy as received: only ever grows within an epoch (protocol/messages.hpp, EnergyMessage).
@@ -119,14 +129,17 @@ class PassivityPort {
   // out_w: the power this tick's output would carry out of the channel into this lever's side (negative: the
   // lever's side pushes energy in). Returns the factor in [0, 1] on the port's output (the force or velocity
   // whose product with its conjugate gave out_w): 1 unless the output would exceed the peer's input energy.
-  constexpr double limit(double out_w, double dt) noexcept {
+  // spend_time_s > dt: this tick may spend at most dt / spend_time_s of what the port holds (an exponential
+  // drain, never more than the hard cut allows, so the bound on the channel's energy is unchanged).
+  constexpr double limit(double out_w, double dt, double spend_time_s = 0.0) noexcept {
     state_.scale = 1.0;
     if (!enabled() || !(out_w == out_w)) return 1.0;
     const double requested = out_w * dt;
     if (requested <= 0.0) {
       take_in(-requested);
     } else {
-      const double budget = available();
+      const double held = available();
+      const double budget = spend_time_s > dt ? held * (dt / spend_time_s) : held;
       double allowed = requested;
       if (acts() && requested > budget) {
         allowed = budget > 0.0 ? budget : 0.0;
