@@ -48,6 +48,7 @@ const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive",
 // Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
 constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
+constexpr program::Bounds kSpendSeconds{0.0, 10.0, false, false, "a time in s"};
 constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
 constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
@@ -64,6 +65,7 @@ struct RunOptions {
   bool no_homing = false;
   lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
   double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
+  double passivity_display_spend_s = lever::fw::PassivityConfig{}.display_spend_time_s;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -160,6 +162,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "of each port's own input energy, what it keeps for its own output (0: the literature's TDPA)")
       ->check(program::number(kReserveJoules))
       ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.reserve_j));
+  cmd.add_option("--passivity-display-spend-s", o.passivity_display_spend_s,
+                 "the HSI's display spends its port's energy over this time constant (0: all at once, the "
+                 "literature's TDPA)")
+      ->check(program::number(kSpendSeconds))
+      ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.display_spend_time_s));
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
                "random angle, homed against the end stop before the scenario)");
@@ -207,6 +214,8 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.passivity.mode = o.passivity;
   c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;
   c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.hsi_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
+  c.top_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
   for (const auto& f : o.faults) {
     c.faults.push_back(parse_fault_spec(f));
     if (c.faults.back().start_s >= c.duration_s)
