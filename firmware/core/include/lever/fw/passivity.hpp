@@ -38,7 +38,7 @@ struct PassivityConfig {
   // HSI: the display spends the energy its port holds at most at the rate (held energy) / (this time), instead of
   // all of it on the tick it is asked for. Spent at once, the account is empty soon after the hand starts to yield,
   // and the displayed force then switches whole on the sign of the hand's velocity: all of it while the hand
-  // pushes in, none while it yields (traced for a hand near rest against a press: every 20-30 ms). Spread out,
+  // pushes in, none while it yields (traced for a hand about its rest against a press: every 10-30 ms). Spread out,
   // the account drains exponentially and always holds something: the force allowed is held / (time x arm x
   // speed), whole near rest and less the faster the hand yields. 40 ms is the time constant of the hand on the
   // lever, 1 / sqrt(3 N m/rad / 5e-3 kg m^2) (docs/hil-model.md): a fade the hand can follow. 0 spends at once (the
