@@ -10,7 +10,10 @@
 //   POSITION_LIMIT) while the scenario runs. The torque sent to the motor never exceeds the limit by
 //   construction (the clamp), so the bound is on what the controllers demand;
 // - position: once neither lever has felt a contact force for 1 s (five of the TOP's 200 ms drift time
-//   constants), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay earlier;
+//   constants), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay earlier.
+//   Found later: wall-tap has such windows only before its first contact, so this judges the free motion's
+//   tracking, not the drift the controller leaves. That is judged separately, with the same bound, in the windows
+//   after a contact that wall-tap has (Outcome::max_rest_offset_after_contact_rad), fixed before its results;
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -34,6 +37,13 @@ struct Outcome {
   // The same, only while both levers are at rest (the HSI then and one delay earlier, the TOP over the last
   // 10 ms, all below 0.05 rad/s): the offset the passivity controller leaves, without free motion's tracking.
   double max_rest_offset_rad = 0.0;
+  // The drift's windows above are the free motion before the first contact: wall-tap never goes a second
+  // without a felt force after it. The drift the controller leaves after a contact is judged in the windows that
+  // do come: 0.5 s after the last felt force (two and a half of the pull's 200 ms time constants: a gap left at
+  // the contact's end is down to 8 %), both levers armed; and the same at rest.
+  double max_drift_after_contact_rad = 0.0;
+  std::size_t after_contact_ticks = 0;
+  double max_rest_offset_after_contact_rad = 0.0;
   double force_rmse_n = 0.0;
 };
 
@@ -69,18 +79,26 @@ Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::Pass
   o.force_rmse_n = r.force_rmse_n;
   o.lever_faults = r.hsi_lever_faults.count + r.top_lever_faults.count;
   const auto lag = static_cast<std::size_t>(r.nominal_delay_ticks);
+  constexpr int kArmed = static_cast<int>(protocol::LeverState::armed);
   std::size_t quiet = 0;
+  bool touched = false;
   for (std::size_t k = 0; k < r.trace.size(); ++k) {
     const auto& row = r.trace[k];
     const bool felt = row.contact_force > 0.0 || std::fabs(row.displayed_force) > 0.1;
     quiet = felt ? 0 : quiet + 1;
-    if (quiet <= 1000 || k < lag) continue;
-    ++o.drift_ticks;
+    touched = touched || felt;
+    if (quiet <= 500 || k < lag || k < 10) continue;
     const double offset = std::fabs(row.top_angle - r.trace[k - lag].hsi_angle);
-    o.max_drift_rad = std::max(o.max_drift_rad, offset);
-    const bool at_rest = k >= 10 && std::fabs(row.hsi_velocity) < 0.05 &&
-                         std::fabs(r.trace[k - lag].hsi_velocity) < 0.05 &&
+    const bool at_rest = std::fabs(row.hsi_velocity) < 0.05 && std::fabs(r.trace[k - lag].hsi_velocity) < 0.05 &&
                          std::fabs(row.top_angle - r.trace[k - 10].top_angle) < 0.05 * 0.010;
+    if (touched && row.hsi_state == kArmed && row.top_state == kArmed) {
+      ++o.after_contact_ticks;
+      o.max_drift_after_contact_rad = std::max(o.max_drift_after_contact_rad, offset);
+      if (at_rest) o.max_rest_offset_after_contact_rad = std::max(o.max_rest_offset_after_contact_rad, offset);
+    }
+    if (quiet <= 1000) continue;
+    ++o.drift_ticks;
+    o.max_drift_rad = std::max(o.max_drift_rad, offset);
     if (at_rest) o.max_rest_offset_rad = std::max(o.max_rest_offset_rad, offset);
   }
   return o;
@@ -159,7 +177,9 @@ TEST_CASE("every delayed tdpa run has quiet stretches to judge the drift in", "[
   for (const double delay_ms : kDelaysMs) {
     for (const auto seed : kSeeds) {
       CAPTURE(delay_ms, seed);
-      CHECK(tdpa_run(delay_ms, seed).drift_ticks > 100);
+      const auto o = tdpa_run(delay_ms, seed);
+      CHECK(o.drift_ticks > 100);
+      CHECK(o.after_contact_ticks > 100);
     }
   }
 }
@@ -175,7 +195,8 @@ void check_drift_and_chatter(double delay_ms, bool drift, bool chatter) {
   }
 }
 
-TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity]") {
+TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
+          "[hil][passivity]") {
   check_drift_and_chatter(10.0, true, false);
 }
 
@@ -192,8 +213,25 @@ TEST_CASE("at 10 and 25 ms tdpa keeps contact onsets within twice the zero-delay
 // as traced (docs/firmware.md): a fast tap spends the TOP's reserve in a few ms of impact, the reference stops at
 // the surface with nothing to press on, and the lever rattles on the wall until the press's energy arrives a round
 // trip later.
-TEST_CASE("from 25 ms on tdpa keeps the TOP within 10 mrad of the delayed HSI", "[hil][passivity][!shouldfail]") {
+TEST_CASE("from 25 ms on tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
+          "[hil][passivity][!shouldfail]") {
   for (const double delay_ms : {25.0, 50.0, 100.0}) check_drift_and_chatter(delay_ms, true, false);
+}
+
+// Not met at any delay (means over seeds 1-10 of each run's largest: 7.1, 10.7, 10.9 and 11.4 mrad at 10-100 ms;
+// without tdpa 1.7, 1.5, 0.6 and 5.1). In contact the TOP's reference does not follow the HSI past the wall (it has
+// no energy to, and the pull is off there), so when the contact ends the TOP is behind by the depth the hand went
+// past the wall, and the 5/s pull closes that to 8 % in the 0.5 s the window waits. A 10/s pull gave 2.5, 1.3, 1.7
+// and 0.6 mrad, at 4.49 onsets/s at 50 ms against 4.05 (docs/firmware.md).
+TEST_CASE("after a contact tdpa leaves the TOP at rest within 10 mrad of the delayed HSI",
+          "[hil][passivity][!shouldfail]") {
+  for (const double delay_ms : kDelaysMs) {
+    for (const auto seed : kSeeds) {
+      const auto o = tdpa_run(delay_ms, seed);
+      CAPTURE(delay_ms, seed, o.max_rest_offset_after_contact_rad);
+      CHECK(o.max_rest_offset_after_contact_rad <= 0.010);
+    }
+  }
 }
 
 TEST_CASE("at 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's",
@@ -234,6 +272,7 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
   for (const auto& variant : variants) {
     for (const double delay_ms : {0.0, 10.0, 25.0, 50.0, 100.0}) {
       double observed = 0.0, onsets = 0.0, trips = 0.0, drift = 0.0, rest = 0.0, rest_max = 0.0, rmse = 0.0;
+      double after = 0.0, after_max = 0.0, after_rest = 0.0, after_rest_max = 0.0;
       constexpr int kTableSeeds = 10;
       for (int seed = 1; seed <= kTableSeeds; ++seed) {
         const auto o =
@@ -245,9 +284,16 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
         rest += 1e3 * o.max_rest_offset_rad / kTableSeeds;
         rest_max = std::max(rest_max, 1e3 * o.max_rest_offset_rad);
         rmse += o.force_rmse_n / kTableSeeds;
+        after += 1e3 * o.max_drift_after_contact_rad / kTableSeeds;
+        after_max = std::max(after_max, 1e3 * o.max_drift_after_contact_rad);
+        after_rest += 1e3 * o.max_rest_offset_after_contact_rad / kTableSeeds;
+        after_rest_max = std::max(after_rest_max, 1e3 * o.max_rest_offset_after_contact_rad);
       }
-      std::printf("| %s | %.0f ms | %.3f J | %.2f | %.1f | %.1f mrad | %.1f mrad (%.1f) | %.2f N |\n", variant.name,
-                  delay_ms, observed, onsets, trips, drift, rest, rest_max, rmse);
+      std::printf(
+          "| %s | %.0f ms | %.3f J | %.2f | %.1f | %.1f mrad | %.1f mrad (%.1f) | %.1f mrad (%.1f) | "
+          "%.1f mrad (%.1f) | %.2f N |\n",
+          variant.name, delay_ms, observed, onsets, trips, drift, rest, rest_max, after, after_max, after_rest,
+          after_rest_max, rmse);
     }
   }
   SUCCEED();
