@@ -25,10 +25,12 @@ constexpr const char* name(PassivityMode m) noexcept {
 struct PassivityConfig {
   PassivityMode mode = PassivityMode::off;
   // TOP: the rate (1/s) at which the passive reference is pulled toward the HSI's position that rides on every
-  // motion frame, through the controller like any motion. 5/s (a 200 ms time constant) is slower than a tap's
-  // contact (about 100-150 ms in wall-tap) so the correction does not itself drive the wall, and fast enough
-  // to close a free-motion gap within a second.
-  double drift_gain_per_s = 5.0;
+  // motion frame, through the controller like any motion; only out of contact (top_role.hpp). When a contact ends
+  // the TOP is behind the HSI by the depth the hand went past the wall, and the pull closes that. Measured
+  // (docs/firmware.md, "Passivity under delay"): at 5/s (a 200 ms time constant, first chosen as slower than a
+  // tap's 100-150 ms contact) 8 % of the gap, 7-13 mrad, was still there 0.5 s after a contact; 10/s closes it to
+  // 1-3 mrad for a few more contact onsets (4.49 against 4.05/s at 50 ms), 20/s gave more onsets still.
+  double drift_gain_per_s = 10.0;
   // Of its own input energy, the port keeps up to this much for its own output instead of passing it to the
   // peer (docs/firmware.md, "Local reserve"). 0 is the per-port TDPA of the literature: every joule that comes
   // in goes to the peer, and a port puts out only what the peer passed. 12.5 mJ is tau_max^2 / (2 k_p), what the
