@@ -9,9 +9,9 @@
 // - protection: no lever trips its own protection (TORQUE_LIMIT: the demand above the 1 N m limit for 250 ms;
 //   POSITION_LIMIT) while the scenario runs. The torque sent to the motor never exceeds the limit by
 //   construction (the clamp), so the bound is on what the controllers demand;
-// - position: once neither lever has felt a contact force for 1 s (five of the TOP's 200 ms drift time
-//   constants), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay earlier.
-//   Found later: wall-tap has such windows only before its first contact, so this judges the free motion's
+// - position: once neither lever has felt a contact force for 1 s (five time constants of the TOP's drift pull
+//   as it then was, 5/s), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay
+//   earlier. Found later: wall-tap has such windows only before its first contact, so this judges the free motion's
 //   tracking, not the drift the controller leaves. That is judged separately, with the same bound, in the windows
 //   after a contact that wall-tap has (Outcome::max_rest_offset_after_contact_rad), fixed before its results;
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
@@ -39,8 +39,8 @@ struct Outcome {
   double max_rest_offset_rad = 0.0;
   // The drift's windows above are the free motion before the first contact: wall-tap never goes a second
   // without a felt force after it. The drift the controller leaves after a contact is judged in the windows that
-  // do come: 0.5 s after the last felt force (two and a half of the pull's 200 ms time constants: a gap left at
-  // the contact's end is down to 8 %), both levers armed; and the same at rest.
+  // do come: 0.5 s after the last felt force (two and a half time constants of the 5/s pull it was fixed with: a
+  // gap left at the contact's end down to 8 %), both levers armed; and the same at rest.
   double max_drift_after_contact_rad = 0.0;
   std::size_t after_contact_ticks = 0;
   double max_rest_offset_after_contact_rad = 0.0;
@@ -146,9 +146,9 @@ TEST_CASE("with tdpa no lever trips its protection at 10, 25 and 50 ms", "[hil][
   }
 }
 
-// Not met at 100 ms, and not testable per seed: 2 of seeds 1-10 trip on x86-64 (seed 3 eight times, seed 6 in a
-// cascade of 19 armed->fault transitions), and some under arm64's libm, whose trajectories differ (4.6 per run on
-// the mean). What tdpa buys there is checked instead: against the loop without it (about 75 trips per run).
+// Not met at 100 ms, and not testable per seed: 2 of seeds 1-10 trip on x86-64 (seed 6 twice, seed 10 three
+// times), and some under arm64's libm, whose trajectories differ (0.4 per run on the mean). What tdpa buys there is
+// checked instead: against the loop without it (about 75 trips per run).
 TEST_CASE("at 100 ms tdpa trips the protection far less often than the loop without it", "[hil][passivity]") {
   std::uint32_t with = 0, without = 0;
   for (const auto seed : kSeeds) {
@@ -204,33 +204,50 @@ TEST_CASE("at 10 and 25 ms tdpa keeps contact onsets within twice the zero-delay
   for (const double delay_ms : {10.0, 25.0}) check_drift_and_chatter(delay_ms, false, true);
 }
 
-// Not met. Drift, from 25 ms on (means over seeds 1-10: 3.7, 6.8 and 48.3 mrad at 25, 50 and 100 ms, the last with
-// a trip cascade; at 25 ms seeds 1-5 stay within the bound on x86-64, seed 5 under arm64's libm does not, 11.4
-// mrad). The loop without tdpa shows the same excursions (seed 4 at 50 ms: 16.9 against 16.5 mrad): the measure
-// includes free motion, where the jitter puts a fast reach several milliseconds off the nominal delay
-// (docs/firmware.md). Chatter, at 50 ms on some seeds (4.05 onsets/s on the mean against 2.2 at zero delay; on
-// x86-64 seeds 1 and 3 above twice their zero-delay runs, under arm64's libm seeds 3-5) and at 100 ms on all (6.1),
-// as traced (docs/firmware.md): a fast tap spends the TOP's reserve in a few ms of impact, the reference stops at
-// the surface with nothing to press on, and the lever rattles on the wall until the press's energy arrives a round
-// trip later.
+// Not met. Drift before the first contact, from 25 ms on (means over seeds 1-10: 3.3, 6.3 and 11.4 mrad at 25, 50
+// and 100 ms; at 25 ms seeds 1-5 stay within the bound on x86-64, seed 5 under arm64's libm does not, 10.9 mrad).
+// The loop without tdpa shows the same excursions (seed 4 at 50 ms: 16.9 against 16.5 mrad at the first defaults):
+// the measure includes free motion, where the jitter puts a fast reach several milliseconds off the nominal delay
+// (docs/firmware.md). Chatter, at 50 ms on some seeds (4.49 onsets/s on the mean against 2.2 at zero delay; seeds
+// 1, 3 and 4 above twice their zero-delay runs on x86-64 and under arm64's libm) and at 100 ms on all (6.7), as
+// traced (docs/firmware.md): a fast tap spends the TOP's reserve in a few ms of impact, the reference stops at the
+// surface with nothing to press on, and the lever rattles on the wall until the press's energy arrives a round trip
+// later.
 TEST_CASE("from 25 ms on tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
           "[hil][passivity][!shouldfail]") {
   for (const double delay_ms : {25.0, 50.0, 100.0}) check_drift_and_chatter(delay_ms, true, false);
 }
 
-// Not met at any delay (means over seeds 1-10 of each run's largest: 7.1, 10.7, 10.9 and 11.4 mrad at 10-100 ms;
-// without tdpa 1.7, 1.5, 0.6 and 5.1). In contact the TOP's reference does not follow the HSI past the wall (it has
-// no energy to, and the pull is off there), so when the contact ends the TOP is behind by the depth the hand went
-// past the wall, and the 5/s pull closes that to 8 % in the 0.5 s the window waits. A 10/s pull gave 2.5, 1.3, 1.7
-// and 0.6 mrad, at 4.49 onsets/s at 50 ms against 4.05 (docs/firmware.md).
-TEST_CASE("after a contact tdpa leaves the TOP at rest within 10 mrad of the delayed HSI",
+// In contact the TOP's reference does not follow the HSI past the wall (it has no energy to, and the pull is off
+// there), so when the contact ends the TOP is behind by the depth the hand went past the wall; the pull closes
+// that. With the first default pull, 5/s, this was not met at any delay (means over seeds 1-10 of each run's
+// largest: 7.1, 10.7, 10.9 and 11.4 mrad at 10-100 ms; without tdpa 1.7, 1.5, 0.6 and 5.1); at 10/s it is from
+// 25 ms on (docs/firmware.md).
+void check_offset_after_contact(double delay_ms) {
+  for (const auto seed : kSeeds) {
+    const auto o = tdpa_run(delay_ms, seed);
+    CAPTURE(delay_ms, seed, o.max_rest_offset_after_contact_rad);
+    CHECK(o.max_rest_offset_after_contact_rad <= 0.010);
+  }
+}
+
+TEST_CASE("from 25 ms on, after a contact tdpa leaves the TOP at rest within 10 mrad of the delayed HSI",
+          "[hil][passivity]") {
+  for (const double delay_ms : {25.0, 50.0, 100.0}) check_offset_after_contact(delay_ms);
+}
+
+// Not met at 10 ms, on seeds 1-10 (the event below comes once in several runs, so seeds 1-5 would meet it on
+// x86-64 by chance): seed 6 on x86-64, 14 mrad, and seed 4 under arm64's libm, 36 mrad (of the held-out seeds,
+// seed 20: 23 mrad). Traced for the last two: the HSI comes to rest, its last one-count velocity frame (0.38 rad/s)
+// arrives and the zero after it is lost (1 % loss), and the TOP's receiver holds 0.38 rad/s until the next frame
+// or the 100 ms refresh. That is the deadband's exposure to a lost frame, the same without tdpa (largest 12.5 mrad
+// at 10 ms), not the passivity controller's drift; the measure cannot tell them apart.
+TEST_CASE("at 10 ms, after a contact tdpa leaves the TOP at rest within 10 mrad of the delayed HSI",
           "[hil][passivity][!shouldfail]") {
-  for (const double delay_ms : kDelaysMs) {
-    for (const auto seed : kSeeds) {
-      const auto o = tdpa_run(delay_ms, seed);
-      CAPTURE(delay_ms, seed, o.max_rest_offset_after_contact_rad);
-      CHECK(o.max_rest_offset_after_contact_rad <= 0.010);
-    }
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto o = tdpa_run(10.0, seed);
+    CAPTURE(seed, o.max_rest_offset_after_contact_rad);
+    CHECK(o.max_rest_offset_after_contact_rad <= 0.010);
   }
 }
 
@@ -242,7 +259,7 @@ TEST_CASE("at 50 and 100 ms tdpa keeps contact onsets within twice the zero-dela
 // What the display's spread spending buys (PassivityConfig::display_spend_time_s): against the literature's
 // controller, which lets the held energy out at once and then cuts the whole force, the same runs at 50 ms.
 // Direction only, chosen after the table in docs/firmware.md was measured (means over seeds 1-10: 4.05 against
-// 6.06 onsets/s).
+// 6.06 onsets/s with the drift pull at 5/s; 4.49 against 6.72 at 10/s).
 TEST_CASE("at 50 ms the display's spread spending gives fewer contact onsets than spending at once",
           "[hil][passivity]") {
   double spread = 0.0, at_once = 0.0;
