@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include "lever/common/rng.hpp"
 #include "lever/fw/data_channel.hpp"
@@ -71,8 +72,9 @@ lever::protocol::DataFlags flags_of(const Out& out) {
 struct Link {
   DataSender<std::int32_t> tx;
   DataReceiver<std::int32_t> rx;
-  explicit Link(const Config<double>& c, Tick refresh = 100)
-      : tx(c, {lever::protocol::kForceLsb, lever::protocol::kForceCodeMin, lever::protocol::kForceCodeMax}, refresh),
+  explicit Link(const Config<double>& c, Tick refresh = 100, Tick rest_repeat = 0)
+      : tx(c, {lever::protocol::kForceLsb, lever::protocol::kForceCodeMin, lever::protocol::kForceCodeMax}, refresh,
+           rest_repeat),
         rx({lever::protocol::kForceLsb, lever::protocol::kForceCodeMin, lever::protocol::kForceCodeMax}) {}
 };
 
@@ -123,6 +125,58 @@ TEST_CASE("a lost update heals at the next refresh, and the gap is counted", "[f
   }
   CHECK(healed_at == 150u);  // the refresh 100 ticks after the lost frame
   CHECK(link.rx.sequence().missing() == 1u);
+}
+
+// At rest the deadband goes quiet, so the frame that brings a stream there is the one whose loss lasts: the
+// receiver would hold the last moving value until the refresh (at one encoder count per tick, 38 mrad of drift).
+TEST_CASE("the frame that brings a stream to rest is repeated once, so its loss heals in the repeat time",
+          "[firmware][link]") {
+  // A value that moves, comes to rest (zero, the paper's rule: floor 0), moves again and rests again.
+  const auto value_at = [](Tick now) { return (now >= 100 && now < 195) || (now >= 400 && now < 450) ? 2.0 : 0.0; };
+  for (const Tick rest_repeat : {Tick{0}, Tick{10}}) {
+    INFO("rest_repeat " << rest_repeat);
+    Link link({Mode::deadband, 0.1, 0.0, 0.0}, 100, rest_repeat);
+    std::vector<Tick> refreshes;
+    Tick healed_at = 0;
+    for (Tick now = 1; now < 700; ++now) {
+      const auto out = link.tx.offer(now, value_at(now));
+      if (out.send && out.refresh) refreshes.push_back(now);
+      const bool lose = now == 195;  // exactly the frame that brings the stream to rest
+      if (out.send && !lose) link.rx.accept(now, static_cast<std::uint16_t>(now), out.seq, flags_of(out), out.code);
+      if (now > 195 && healed_at == 0 && *link.rx.value_at(now, 1000) == 0.0) healed_at = now;
+    }
+    CHECK(link.rx.sequence().missing() == 1u);
+    if (rest_repeat == 0) {
+      CHECK(healed_at == 295u);  // the refresh
+      CHECK(refreshes == std::vector<Tick>{1, 295, 395, 550, 650});
+    } else {
+      CHECK(healed_at == 205u);
+      // Each arrival at rest once (the first frame of the stream included), never a moving value, and the
+      // refresh period counts from the repeat.
+      CHECK(refreshes == std::vector<Tick>{1, 11, 205, 305, 460, 560, 660});
+    }
+  }
+}
+
+TEST_CASE("with a floor, rest is anywhere within the floor of zero", "[firmware][link]") {
+  // Decaying toward zero: the deadband stops sending once the held value is within the floor (0.5 N).
+  Link link({Mode::deadband, 0.1, 0.5, 0.0}, 1000, 10);
+  std::vector<Tick> refreshes;
+  Tick last_data = 0;
+  double last_value = 0.0;
+  for (Tick now = 1; now < 500; ++now) {
+    const double force = now < 50 ? 5.0 : 5.0 * std::exp(-static_cast<double>(now - 50) / 20.0);
+    const auto out = link.tx.offer(now, force);
+    if (!out.send) continue;
+    if (out.refresh) refreshes.push_back(now);
+    if (!out.refresh) {
+      last_data = now;
+      last_value = out.code * lever::protocol::kForceLsb;
+    }
+  }
+  REQUIRE(last_data > 50u);
+  CHECK(std::fabs(last_value) <= 0.5);
+  CHECK(refreshes == std::vector<Tick>{1, last_data + 10});  // only the arrival within the floor, once
 }
 
 TEST_CASE("duplicates and late frames are not fed to the model", "[firmware][link]") {

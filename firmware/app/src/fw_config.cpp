@@ -111,6 +111,8 @@ ConfigSchema schema_for(FwConfig& config) {
   s.integer("link.heartbeat_ms", l.heartbeat_period, 1, 1000, "ms", "heartbeat period");
   s.integer("link.comms_timeout_ms", l.comms_timeout, 1, 60000, "ms", "peer silent this long latches COMMS");
   s.integer("link.refresh_ms", l.refresh_period, 1, 30000, "ms", "a data frame at least this often");
+  s.integer("link.rest_repeat_ms", l.rest_repeat, 0, 30000, "ms",
+            "a frame that brings a stream to rest is sent again this much later (0: never)");
 
   bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
   s.choice("codec.motion.velocity", l.motion_velocity,

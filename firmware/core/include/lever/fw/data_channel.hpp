@@ -52,8 +52,15 @@ class DataSender {
     codec::Mode mode = codec::Mode::deadband;
   };
 
-  constexpr DataSender(const codec::Config<double>& config, WireQuantizer<WireInt> quantizer, Tick refresh_period)
-      : sender_(in_tick_units(config), quantizer), config_(config), refresh_period_(refresh_period) {}
+  // rest_repeat: a frame that brings the stream to rest is sent once more this many ticks later (0: never).
+  // At rest the deadband goes quiet, so a lost rest frame would otherwise leave the receiver holding the last
+  // moving value until the refresh: at one encoder count per tick, 0.38 rad/s for 100 ms is 38 mrad of drift.
+  constexpr DataSender(const codec::Config<double>& config, WireQuantizer<WireInt> quantizer, Tick refresh_period,
+                       Tick rest_repeat = 0)
+      : sender_(in_tick_units(config), quantizer),
+        config_(config),
+        refresh_period_(refresh_period),
+        rest_repeat_(rest_repeat) {}
 
   // In user units (cut-off in Hz).
   constexpr const codec::Config<double>& config() const noexcept { return config_; }
@@ -70,10 +77,12 @@ class DataSender {
     sender_.reset();
     force_next_ = true;
     restart_next_ = true;
+    last_at_rest_ = false;  // a stream that starts at rest has arrived there: its first frame is repeated too
   }
 
   Output offer(Tick now, double value) noexcept {
-    const bool refresh_due = force_next_ || now - last_sent_ >= refresh_period_;
+    const bool repeat_due = rest_repeat_pending_ && now - last_sent_ >= rest_repeat_;
+    const bool refresh_due = force_next_ || repeat_due || now - last_sent_ >= refresh_period_;
     const auto d = sender_.offer(static_cast<double>(now), {value}, refresh_due);
     Output out;
     if (!d.send) return out;
@@ -82,6 +91,11 @@ class DataSender {
     last_sent_ = now;
     force_next_ = false;
     restart_next_ = false;
+    // Rest is where the deadband would stop sending: within the floor of zero (exactly zero under the paper's
+    // rule). Only the frame that arrives there is repeated; the repeat itself, or a refresh, is not.
+    const bool at_rest = d.value[0] <= config_.floor && -d.value[0] <= config_.floor;
+    rest_repeat_pending_ = rest_repeat_ > 0 && at_rest && !last_at_rest_;
+    last_at_rest_ = at_rest;
     return out;
   }
 
@@ -89,7 +103,10 @@ class DataSender {
   Sender sender_;
   codec::Config<double> config_;
   Tick refresh_period_;
+  Tick rest_repeat_;
   Tick last_sent_ = 0;
+  bool rest_repeat_pending_ = false;
+  bool last_at_rest_ = false;
   bool force_next_ = true;
   bool restart_next_ = true;
   std::uint8_t seq_ = 0;

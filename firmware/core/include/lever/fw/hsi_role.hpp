@@ -27,7 +27,7 @@ class HsiRole {
 
   explicit constexpr HsiRole(const LeverConfig& c) noexcept
       : display_(c.display),
-        sender_(c.motion_codec, velocity_wire(), c.refresh_period),
+        sender_(c.motion_codec, velocity_wire(), c.refresh_period, c.rest_repeat),
         receiver_(force_wire()),
         stale_after_(2 * c.refresh_period),
         motion_velocity_(c.motion_velocity),

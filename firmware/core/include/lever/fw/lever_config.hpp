@@ -33,6 +33,9 @@ struct LeverConfig {
   Tick heartbeat_period = 25;  // 40 Hz
   Tick comms_timeout = 100;    // peer silent longer than this latches COMMS
   Tick refresh_period = 100;   // the data sender transmits at least this often, so a lost update heals
+  // A frame that brings a stream to rest is sent again this much later (0: never), so a lost one heals in
+  // 10 ms rather than a refresh period: one encoder count per tick (0.38 rad/s) held for 10 ms is 3.8 mrad.
+  Tick rest_repeat = 10;
 
   // Deadband per direction (cut-off in Hz). Only the sending end of a direction uses its codec config.
   // The floors are not the paper's rule (floor 0) on purpose: a smooth velocity estimate decays toward zero

@@ -27,7 +27,7 @@ class TopRole {
 
   explicit constexpr TopRole(const LeverConfig& c) noexcept
       : controller_(c.position),
-        sender_(c.force_codec, force_wire(), c.refresh_period),
+        sender_(c.force_codec, force_wire(), c.refresh_period, c.rest_repeat),
         receiver_(velocity_wire()),
         stale_after_(2 * c.refresh_period),
         approach_speed_(c.position.approach_speed_rad_s),
