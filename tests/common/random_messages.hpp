@@ -9,6 +9,9 @@ inline protocol::HeartbeatMessage random_heartbeat(Rng& rng) {
   protocol::HeartbeatMessage h;
   h.state = static_cast<protocol::LeverState>(rng.next() % 5);
   h.position_valid = (rng.next() & 1) != 0;
+  h.arming_parity = (rng.next() & 1) != 0;
+  h.peer_arming_parity = (rng.next() & 1) != 0;
+  h.peer_arming_known = (rng.next() & 1) != 0;
   h.faults = static_cast<std::uint16_t>(rng.next());
   h.last_data_seq = static_cast<std::uint8_t>(rng.next());
   h.seq_gaps = static_cast<std::uint8_t>(rng.next());

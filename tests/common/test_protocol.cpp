@@ -70,6 +70,8 @@ TEST_CASE("every message survives pack and decode for random contents", "[protoc
     HeartbeatMessage hback;
     REQUIRE(decode(pack(h, pair, role), hback, a) == DecodeError::none);
     CHECK(a.role == role);
+    CHECK((hback.arming_parity == h.arming_parity && hback.peer_arming_parity == h.peer_arming_parity &&
+           hback.peer_arming_known == h.peer_arming_known));
     CHECK((hback.state == h.state && hback.position_valid == h.position_valid && hback.faults == h.faults &&
            hback.last_data_seq == h.last_data_seq && hback.seq_gaps == h.seq_gaps &&
            hback.rejected_frames == h.rejected_frames && hback.counter == h.counter &&
@@ -134,9 +136,9 @@ TEST_CASE("malformed frames are error codes", "[protocol]") {
   CanFrame bad_state = pack(HeartbeatMessage{}, 0, Role::hsi);
   bad_state.data[0] = 9;
   CHECK(decode(bad_state, h, a) == DecodeError::out_of_range);
-  CanFrame reserved_state_bits = pack(HeartbeatMessage{}, 0, Role::hsi);
-  reserved_state_bits.data[0] = 0x21;
-  CHECK(decode(reserved_state_bits, h, a) == DecodeError::out_of_range);
+  CanFrame unused_state_code = pack(HeartbeatMessage{}, 0, Role::hsi);
+  unused_state_code.data[0] = 0xE5;  // state 5 (none such), with every handshake bit set
+  CHECK(decode(unused_state_code, h, a) == DecodeError::out_of_range);
 
   CommandMessage c;
   CanFrame bad_opcode = pack(CommandMessage{}, 0);

@@ -132,13 +132,11 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
     check_frame(dbc.at("LeverEnergyTop"), pack(e, 0, Role::top), energy);
 
     const HeartbeatMessage h = lever::test::random_heartbeat(rng);
-    const Expected heartbeat{{"State", static_cast<double>(h.state)},
-                             {"PositionValid", h.position_valid},
-                             {"Faults", h.faults},
-                             {"LastDataSeq", h.last_data_seq},
-                             {"SeqGaps", h.seq_gaps},
-                             {"RejectedFrames", h.rejected_frames},
-                             {"Counter", h.counter},
+    const Expected heartbeat{{"State", static_cast<double>(h.state)},  {"PositionValid", h.position_valid},
+                             {"ArmingParity", h.arming_parity},        {"PeerArmingParity", h.peer_arming_parity},
+                             {"PeerArmingKnown", h.peer_arming_known}, {"Faults", h.faults},
+                             {"LastDataSeq", h.last_data_seq},         {"SeqGaps", h.seq_gaps},
+                             {"RejectedFrames", h.rejected_frames},    {"Counter", h.counter},
                              {"EncoderErrors", h.encoder_errors}};
     check_frame(dbc.at("LeverHeartbeatHsi"), pack(h, 0, Role::hsi), heartbeat);
     check_frame(dbc.at("LeverHeartbeatTop"), pack(h, 0, Role::top), heartbeat);

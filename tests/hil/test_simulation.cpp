@@ -114,18 +114,35 @@ TEST_CASE("every fault kind brings the levers to their safe behaviour, in time, 
   }
 }
 
+// Half the datagrams lost for 3 s. With the default 100 ms timeout, 100 ms without a frame from the peer trips
+// COMMS, which happens or not by the draw, early or late in the burst: how much data is lost while the levers
+// still stream, and so how many gaps they count, is the draw's (133 on x86-64; 10 under arm64's libm and ASan once
+// the rest repeat shifted the draws, against a bound of more than 10). So the counting is judged where the levers
+// ride the burst out (the timeout raised past it), and the safety where they may not.
 TEST_CASE("burst loss is healed by the refresh and counted, not a crash of the loop", "[hil][faults]") {
-  SimConfig c = base();
-  c.faults.push_back(parse_fault_spec("burst-loss@2+3"));
-  const auto r = run_simulation(c);
-  CHECK(r.network_lost > 50u);
-  CHECK(r.hsi_seq_gaps + r.top_seq_gaps > 10u);
-  const auto& f = r.faults[0];
-  for (const auto* side : {&f.hsi, &f.top}) {
-    CHECK(side->max_torque_nm_during <= c.top_firmware.torque_limit_nm);
-    if (side->fault_at_s) CHECK(side->safe_at_s == side->fault_at_s);
+  SECTION("the levers ride it out, and count the frames they lose") {
+    SimConfig c = base();
+    c.faults.push_back(parse_fault_spec("burst-loss@2+3"));
+    for (auto* fw : {&c.hsi_firmware, &c.top_firmware}) fw->comms_timeout = 300;
+    const auto r = run_simulation(c);
+    CAPTURE(r.network_lost, r.hsi_seq_gaps, r.top_seq_gaps, r.armed_ticks);
+    CHECK(r.network_lost > 50u);
+    CHECK(r.hsi_lever_faults.count + r.top_lever_faults.count == 0u);
+    CHECK(r.hsi_seq_gaps > 10u);
+    CHECK(r.top_seq_gaps > 10u);
   }
-  CHECK(r.armed_ticks > 4500u);  // armed before the burst and again after it (faults in between are allowed)
+  SECTION("with the default timeout: safe at any fault, and armed again after the burst") {
+    SimConfig c = base();
+    c.faults.push_back(parse_fault_spec("burst-loss@2+3"));
+    const auto r = run_simulation(c);
+    CHECK(r.network_lost > 50u);
+    const auto& f = r.faults[0];
+    for (const auto* side : {&f.hsi, &f.top}) {
+      CHECK(side->max_torque_nm_during <= c.top_firmware.torque_limit_nm);
+      if (side->fault_at_s) CHECK(side->safe_at_s == side->fault_at_s);
+    }
+    CHECK(r.armed_ticks > 4500u);  // armed before the burst and again after it (faults in between are allowed)
+  }
 }
 
 TEST_CASE("a 20 ms delay step is survived with the default timeout; a 150 ms one is a comms fault, handled safely",
@@ -308,4 +325,30 @@ TEST_CASE(
       CHECK(r.armed_ticks > static_cast<std::uint64_t>((k.duration - 5.0) * 1000.0));
     }
   }
+}
+
+// Over a link slower than the host's re-arm, a re-armed lever still receives its peer's heartbeats from before the
+// peer's own re-arm: "armed", then "fault". Taken as a peer that armed with it and left, they threw the pair out
+// again at every re-arm: from this one motor fault, 20 trips of the HSI and 21 of the TOP in 8 s, and up to 53
+// in the delayed wall-tap runs. The arming handshake (a peer counts once its heartbeat echoes this lever's
+// current arming) leaves the one fault and its one re-arm.
+TEST_CASE("over a 100 ms link, one fault is one trip: the re-armed pair is not thrown out by old heartbeats",
+          "[hil][faults]") {
+  SimConfig c = base();
+  c.scenario = ScenarioKind::free_motion;
+  c.network = {100.0, 0.0, 0.0, true};
+  for (auto* fw : {&c.hsi_firmware, &c.top_firmware}) fw->comms_timeout = 300;  // the watchdog stays out of it
+  c.rearm_after_s = 0.0;  // the host re-arms at its next look, as it does after a trip
+  c.faults.push_back(parse_fault_spec("motor-fault@3+0.05:top"));
+  const auto r = run_simulation(c);
+  REQUIRE(r.faults.size() == 1);
+  const auto& f = r.faults[0];
+  CAPTURE(r.hsi_lever_faults.count, r.top_lever_faults.count);
+  CHECK(r.top_lever_faults.count == 1u);
+  CHECK(r.top_lever_faults.bits == protocol::bit(protocol::Fault::motor_driver));
+  CHECK(r.hsi_lever_faults.count == 1u);
+  CHECK(r.hsi_lever_faults.bits == protocol::bit(protocol::Fault::peer_state));
+  REQUIRE(f.hsi.rearmed_at_s.has_value());
+  REQUIRE(f.top.rearmed_at_s.has_value());
+  CHECK(*f.top.rearmed_at_s < 4.0);
 }

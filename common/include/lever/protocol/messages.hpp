@@ -128,7 +128,14 @@ enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault 
 
 struct HeartbeatMessage {
   LeverState state = LeverState::init;
-  bool position_valid = false;       // homed, or an absolute encoder: the position is in lever coordinates
+  bool position_valid = false;  // homed, or an absolute encoder: the position is in lever coordinates
+  // The arming handshake. Over a delayed link a lever that re-arms still receives its peer's heartbeats from
+  // before the peer's own re-arm ("armed", then "fault"), which looked like a peer that armed with it and left.
+  // So each lever says which of its peer's armings it has heard, and a peer's state counts only once it echoes
+  // this lever's current arming. One bit each: stale heartbeats are from the arming just before.
+  bool arming_parity = false;        // parity of this lever's armings so far
+  bool peer_arming_parity = false;   // the peer's arming_parity, as last heard since this lever armed...
+  bool peer_arming_known = false;    // ...if it has heard the peer since (else the bit above means nothing)
   std::uint16_t faults = 0;          // latched fault bits (faults.hpp)
   std::uint8_t last_data_seq = 0;    // sequence number of the sender's last data frame
   std::uint8_t seq_gaps = 0;         // data frames found missing, saturating
@@ -207,6 +214,9 @@ constexpr CanFrame pack(const HeartbeatMessage& m, std::uint8_t pair, Role role)
   CanFrame f = detail::frame(heartbeat_id(pair, role));
   put_bits(f.data, 0, 4, static_cast<std::uint8_t>(m.state));
   put_bits(f.data, 4, 1, m.position_valid);
+  put_bits(f.data, 5, 1, m.arming_parity);
+  put_bits(f.data, 6, 1, m.peer_arming_parity);
+  put_bits(f.data, 7, 1, m.peer_arming_known);
   put_bits(f.data, 8, 16, m.faults);
   put_bits(f.data, 24, 8, m.last_data_seq);
   put_bits(f.data, 32, 8, m.seq_gaps);
@@ -272,9 +282,11 @@ constexpr DecodeError decode(const CanFrame& f, HeartbeatMessage& m, FrameAddres
   if (const auto e = detail::expect(f, MessageKind::heartbeat, address); e != DecodeError::none) return e;
   const auto state = get_bits(f.data, 0, 4);
   if (state > static_cast<std::uint8_t>(LeverState::homing)) return DecodeError::out_of_range;
-  if (get_bits(f.data, 5, 3) != 0) return DecodeError::out_of_range;  // reserved
   m.state = static_cast<LeverState>(state);
   m.position_valid = get_bits(f.data, 4, 1);
+  m.arming_parity = get_bits(f.data, 5, 1);
+  m.peer_arming_parity = get_bits(f.data, 6, 1);
+  m.peer_arming_known = get_bits(f.data, 7, 1);
   m.faults = static_cast<std::uint16_t>(get_bits(f.data, 8, 16));
   m.last_data_seq = static_cast<std::uint8_t>(get_bits(f.data, 24, 8));
   m.seq_gaps = static_cast<std::uint8_t>(get_bits(f.data, 32, 8));
