@@ -62,6 +62,7 @@ struct RunOptions {
   std::optional<double> p_velocity, p_force;
   double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
   double comms_timeout_ms = static_cast<double>(lever::fw::LeverConfig{}.comms_timeout);
+  double rest_repeat_ms = static_cast<double>(lever::fw::LeverConfig{}.rest_repeat);
   bool no_homing = false;
   lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
   double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
@@ -154,6 +155,10 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
       ->check(program::whole(1, 10000, "a whole number of milliseconds"))
       ->default_str(std::to_string(lever::fw::LeverConfig{}.comms_timeout));
+  cmd.add_option("--rest-repeat-ms", o.rest_repeat_ms,
+                 "a data frame that brings its stream to rest is sent again this much later (0: never)")
+      ->check(program::whole(0, 30000, "a whole number of milliseconds"))
+      ->default_str(std::to_string(lever::fw::LeverConfig{}.rest_repeat));
   cmd.add_option("--passivity", o.passivity,
                  "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
       ->transform(program::one_of(kPassivity))
@@ -210,6 +215,8 @@ SimConfig finish(RunOptions& o) {
                    o.filter_hz_force.value_or(o.filter_hz)};
   c.hsi_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<lever::fw::Tick>(o.comms_timeout_ms);
+  c.hsi_firmware.rest_repeat = static_cast<lever::fw::Tick>(o.rest_repeat_ms);
+  c.top_firmware.rest_repeat = static_cast<lever::fw::Tick>(o.rest_repeat_ms);
   c.hsi_firmware.passivity.mode = o.passivity;
   c.top_firmware.passivity.mode = o.passivity;
   c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;

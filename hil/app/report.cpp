@@ -121,6 +121,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"jitter_ms", config.network.jitter_ms},
         {"loss", config.network.loss},
         {"comms_timeout_ms", config.top_firmware.comms_timeout},
+        {"rest_repeat_ms", config.top_firmware.rest_repeat},
         {"passivity", fw::name(config.top_firmware.passivity.mode)},
         {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
         {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},

@@ -96,6 +96,8 @@ num "run --filter-hz-force nan" "--filter-hz-force must be" "$hil" run --filter-
 num "run --comms-timeout-ms 2.5" "--comms-timeout-ms must be a whole number of milliseconds in [1, 10000], got '2.5'" \
   "$hil" run --comms-timeout-ms 2.5
 num "run --comms-timeout-ms 1e300" "--comms-timeout-ms must be" "$hil" run --comms-timeout-ms 1e300
+num "run --rest-repeat-ms -1" "--rest-repeat-ms must be a whole number of milliseconds in [0, 30000], got '-1'" \
+  "$hil" run --rest-repeat-ms -1
 num "sweep --floor-force -0.05 (as run refuses)" "--floor-force must be a floor in N in (0, 65.535], got -0.05" \
   "$hil" sweep --out "$work/sw" --floor-force -0.05
 num "sweep --floor-velocity 0 (the +floor curve would not change)" "--floor-velocity must be a floor in rad/s in (0" \
