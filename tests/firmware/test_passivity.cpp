@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "lever/fw/passivity.hpp"
+#include "lever/fw/top_role.hpp"
 
 using namespace lever::fw;
 using lever::protocol::EnergyMessage;
@@ -209,4 +210,61 @@ TEST_CASE("two ports over a delayed lossy link never put out more than came in, 
     CHECK(lowest >= -1e-9);
     CHECK(out[0] + out[1] > 1.0);  // energy did flow out: the bound was exercised, not idle
   }
+}
+
+// The TOP's drift pull under tdpa (top_role.hpp): out of contact it aims at the HSI's position; in contact no further
+// past the lever than its position loop can press with the motor (torque limit / kp), wherever the HSI went.
+TEST_CASE("in contact the TOP's pull aims no further past the lever than the motor can press", "[passivity]") {
+  LeverConfig config;
+  config.role = lever::protocol::Role::top;
+  config.passivity.mode = PassivityMode::tdpa;
+  TopRole top(config);
+  const double max_press = config.torque_limit_nm / config.position.kp;
+  REQUIRE(max_press == Approx(0.025));  // 1 N m at 40 N m/rad
+
+  LeverTelemetry t;
+  t.position_rad = 0.30;  // against the wall
+  top.on_armed(t);
+  // The peer's energy: the first frame is the baseline, the second gives plenty.
+  top.passivity().receive({0, 0, 1});
+  top.passivity().receive({10'000'000, 1, 1});  // 10 J
+  // The HSI at rest 0.1 rad past the wall; every frame carries its position.
+  auto motion_at = [](double position, lever::fw::Tick now, std::uint8_t seq) {
+    lever::protocol::MotionMessage m;
+    m.position = static_cast<std::int16_t>(std::lround(position / lever::protocol::kPositionLsbRad));
+    m.tick = static_cast<std::uint16_t>(now);
+    m.seq = seq;
+    m.flags.restart = seq == 0;
+    return lever::protocol::pack(m, 0);
+  };
+  // First the HSI where the TOP is, out of contact: the approach after arming ends.
+  lever::fw::Tick now = 1;
+  for (; now < 100; ++now) {
+    bool used = false;
+    if (now % 20 == 1) top.receive(motion_at(0.30, now, static_cast<std::uint8_t>(now / 20)), now, used);
+    t.force_n = 0.0;
+    top.control(now, 1e-3, t);
+  }
+  REQUIRE(t.position_ref_rad == Approx(0.30).margin(1e-3));
+  const double hsi = 0.40;
+  double deepest = 0.0;
+  for (; now < 3000; ++now) {
+    bool used = false;
+    if (now % 20 == 1) top.receive(motion_at(hsi, now, static_cast<std::uint8_t>(now / 20)), now, used);
+    t.force_n = 5.0;  // pressing the wall: in contact
+    top.control(now, 1e-3, t);
+    deepest = std::max(deepest, t.position_ref_rad);
+  }
+  // It has pressed in as far as it may (the pull closes the gap at 10/s), and not further.
+  CHECK(deepest <= t.position_rad + max_press + 1e-9);
+  CHECK(t.position_ref_rad == Approx(t.position_rad + max_press).margin(1e-4));
+  // Out of contact the same pull takes it all the way to the HSI.
+  for (; now < 6000; ++now) {
+    bool used = false;
+    if (now % 20 == 1) top.receive(motion_at(hsi, now, static_cast<std::uint8_t>(now / 20)), now, used);
+    t.force_n = 0.0;
+    t.position_rad = t.position_ref_rad;  // following freely
+    top.control(now, 1e-3, t);
+  }
+  CHECK(t.position_ref_rad == Approx(hsi).margin(1e-3));
 }

@@ -25,8 +25,9 @@ constexpr const char* name(PassivityMode m) noexcept {
 struct PassivityConfig {
   PassivityMode mode = PassivityMode::off;
   // TOP: the rate (1/s) at which the passive reference is pulled toward the HSI's position that rides on every
-  // motion frame, through the controller like any motion; only out of contact (top_role.hpp). When a contact ends
-  // the TOP is behind the HSI by the depth the hand went past the wall, and the pull closes that. Measured
+  // motion frame, through the controller like any motion; in contact toward no further past the lever than the
+  // motor can press (top_role.hpp). When a contact ends the TOP is behind the HSI by what it did not follow of the
+  // depth the hand went past the wall, and the pull closes that. Measured (with no pull in contact, as it first was)
   // (docs/firmware.md, "Passivity under delay"): at 5/s (a 200 ms time constant, first chosen as slower than a
   // tap's 100-150 ms contact) 8 % of the gap, 7-13 mrad, was still there 0.5 s after a contact; 10/s closes it to
   // 1-3 mrad for a few more contact onsets (4.49 against 4.05/s at 50 ms), 20/s gave more onsets still.

@@ -3,6 +3,7 @@
 // measured contact force goes back through the deadband. Everything shared with the HSI (sensors,
 // supervisor, link, safety) is in lever.hpp.
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "lever/fw/controllers.hpp"
@@ -33,7 +34,10 @@ class TopRole {
         approach_speed_(c.position.approach_speed_rad_s),
         passivity_(c.passivity),
         arm_m_(c.display.lever_arm_m),
-        contact_threshold_nm_(c.display.contact_threshold_n * c.display.lever_arm_m) {}
+        contact_threshold_nm_(c.display.contact_threshold_n * c.display.lever_arm_m),
+        // kp 0 (a config that turns the position loop off) presses nothing: no bound on the pull
+        max_press_rad_(c.position.kp > 0.0 ? c.torque_limit_nm / c.position.kp
+                                           : std::numeric_limits<double>::infinity()) {}
 
   static constexpr bool addressed(const protocol::CommandMessage& m) noexcept { return m.to_top; }
   static constexpr bool uses_gauge(const LeverConfig&) noexcept { return true; }
@@ -104,13 +108,20 @@ class TopRole {
       const bool in_contact = gauge_nm > contact_threshold_nm_ || gauge_nm < -contact_threshold_nm_;
       const double force_nm = in_contact ? gauge_nm : 0.0;
       if (passivity_.config().mode == PassivityMode::tdpa) {
-        // The reference integrates the passive velocity instead of jumping to each frame's position. Out of
-        // contact the HSI's position (position_ref_, reset by every motion frame) pulls it along, which closes
-        // the drift the controller left; in contact it does not, because there the drift is the depth the HSI
-        // went past the wall while the TOP had no energy to follow, and pulling the TOP that deep would press
-        // the wall far harder than the force the operator feels (past the torque limit, as measured).
-        const double pull = in_contact ? 0.0 : passivity_.config().drift_gain_per_s;
-        double velocity = t.velocity_ref_rad_s + pull * (position_ref_ - passive_ref_);
+        // The reference integrates the passive velocity instead of jumping to each frame's position. The HSI's
+        // position (position_ref_, reset by every motion frame) pulls it along, which closes the drift the
+        // controller left. In contact that drift is the depth the HSI went past the wall while the TOP had no
+        // energy to follow; the pull there aims no further past the lever than the position loop can press
+        // with the motor's torque (torque limit / kp), so the TOP presses as the operator does, up to the
+        // motor's force, and its demand never sits above the torque limit that trips the protection. Without
+        // the pull in contact, the press stayed a few mrad deep (1-2 N) and the HSI's one-count velocity pulses
+        // bounced the lever off the wall at about 50 Hz (docs/firmware.md, "Passivity under delay").
+        double target = position_ref_;
+        if (in_contact) {
+          if (target > t.position_rad + max_press_rad_) target = t.position_rad + max_press_rad_;
+          if (target < t.position_rad - max_press_rad_) target = t.position_rad - max_press_rad_;
+        }
+        double velocity = t.velocity_ref_rad_s + passivity_.config().drift_gain_per_s * (target - passive_ref_);
         velocity *= passivity_.limit(force_nm * velocity, dt);
         passive_ref_ += velocity * dt;
         t.velocity_ref_rad_s = velocity;
@@ -154,6 +165,7 @@ class TopRole {
   PassivityPort passivity_;
   double arm_m_;
   double contact_threshold_nm_;
+  double max_press_rad_;      // tdpa: how far the pull aims past the lever in contact, torque limit / kp
   double passive_ref_ = 0.0;  // tdpa: the reference the passive velocity integrates
 };
 
