@@ -49,6 +49,7 @@ const program::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive",
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
 constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
 constexpr program::Bounds kSpendSeconds{0.0, 10.0, false, false, "a time in s"};
+constexpr program::Bounds kDriftGain{0.0, 999.0, false, false, "a rate in 1/s"};
 constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
 constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
@@ -67,6 +68,7 @@ struct RunOptions {
   lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
   double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
   double passivity_display_spend_s = lever::fw::PassivityConfig{}.display_spend_time_s;
+  double passivity_drift_gain = lever::fw::PassivityConfig{}.drift_gain_per_s;
   std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
@@ -172,6 +174,10 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "literature's TDPA)")
       ->check(program::number(kSpendSeconds))
       ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.display_spend_time_s));
+  cmd.add_option("--passivity-drift-gain", o.passivity_drift_gain,
+                 "under tdpa, the rate at which the TOP's reference is pulled toward the HSI's position, 1/s")
+      ->check(program::number(kDriftGain))
+      ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.drift_gain_per_s));
   cmd.add_flag("--no-homing", o.no_homing,
                "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
                "random angle, homed against the end stop before the scenario)");
@@ -223,6 +229,8 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
   c.hsi_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
   c.top_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
+  c.hsi_firmware.passivity.drift_gain_per_s = o.passivity_drift_gain;
+  c.top_firmware.passivity.drift_gain_per_s = o.passivity_drift_gain;
   for (const auto& f : o.faults) {
     c.faults.push_back(parse_fault_spec(f));
     if (c.faults.back().start_s >= c.duration_s)
