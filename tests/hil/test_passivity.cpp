@@ -212,8 +212,7 @@ TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before 
 // press (top_role.hpp). Before, at 50 and 100 ms (means over seeds 1-10: 4.63 and 6.58 onsets/s against 2.2 at zero
 // delay; seeds 1 and 3-5 above twice their zero-delay runs at 50 ms, all at 100 ms) the press stayed a few mrad deep
 // and the HSI's one-count velocity pulses bounced the lever off the wall at about 50 Hz (docs/firmware.md).
-TEST_CASE("at 10, 25, 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's",
-          "[hil][passivity]") {
+TEST_CASE("at 10, 25, 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's", "[hil][passivity]") {
   for (const double delay_ms : kDelaysMs) check_drift_and_chatter(delay_ms, false, true);
 }
 
