@@ -50,6 +50,7 @@ constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration i
 constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
 constexpr program::Bounds kSpendSeconds{0.0, 10.0, false, false, "a time in s"};
 constexpr program::Bounds kDriftGain{0.0, 999.0, false, false, "a rate in 1/s"};
+constexpr program::Bounds kShare{0.0, 1.0, false, false, "a share"};
 constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
 constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
@@ -67,6 +68,7 @@ struct RunOptions {
   bool no_homing = false;
   lever::fw::PassivityMode passivity = lever::fw::PassivityMode::off;
   double passivity_reserve_j = lever::fw::PassivityConfig{}.reserve_j;
+  double passivity_reserve_share = lever::fw::PassivityConfig{}.reserve_share;
   double passivity_display_spend_s = lever::fw::PassivityConfig{}.display_spend_time_s;
   double passivity_drift_gain = lever::fw::PassivityConfig{}.drift_gain_per_s;
   std::optional<double> filter_hz_velocity, filter_hz_force;
@@ -169,6 +171,11 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
                  "of each port's own input energy, what it keeps for its own output (0: the literature's TDPA)")
       ->check(program::number(kReserveJoules))
       ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.reserve_j));
+  cmd.add_option("--passivity-reserve-share", o.passivity_reserve_share,
+                 "of each joule a port takes in, the share that may go to its reserve (the rest goes to the peer at "
+                 "once; 1: the reserve fills first)")
+      ->check(program::number(kShare))
+      ->default_str(fmt::format("{}", lever::fw::PassivityConfig{}.reserve_share));
   cmd.add_option("--passivity-display-spend-s", o.passivity_display_spend_s,
                  "the HSI's display spends its port's energy over this time constant (0: all at once, the "
                  "literature's TDPA)")
@@ -227,6 +234,8 @@ SimConfig finish(RunOptions& o) {
   c.top_firmware.passivity.mode = o.passivity;
   c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;
   c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.hsi_firmware.passivity.reserve_share = o.passivity_reserve_share;
+  c.top_firmware.passivity.reserve_share = o.passivity_reserve_share;
   c.hsi_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
   c.top_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
   c.hsi_firmware.passivity.drift_gain_per_s = o.passivity_drift_gain;

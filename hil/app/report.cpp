@@ -124,6 +124,7 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
         {"rest_repeat_ms", config.top_firmware.rest_repeat},
         {"passivity", fw::name(config.top_firmware.passivity.mode)},
         {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
+        {"passivity_reserve_share", config.top_firmware.passivity.reserve_share},
         {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},
         {"passivity_drift_gain_per_s", config.top_firmware.passivity.drift_gain_per_s},
         {"homing", config.homing},

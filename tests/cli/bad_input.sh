@@ -108,6 +108,8 @@ num "sweep --filter-hz-force nan" "--filter-hz-force must be" "$hil" sweep --out
 num "run --gauge-noise-n nan" "--gauge-noise-n must be a noise in N rms in [0, 1], got 'nan'" "$hil" run --gauge-noise-n nan
 num "run --passivity-display-spend-s -1" "--passivity-display-spend-s must be a time in s in [0, 10], got -1" \
   "$hil" run --passivity-display-spend-s -1
+num "run --passivity-reserve-share 1.5" "--passivity-reserve-share must be a share in [0, 1], got 1.5" \
+  "$hil" run --passivity-reserve-share 1.5
 num "run --passivity-drift-gain 1000" "--passivity-drift-gain must be a rate in 1/s in [0, 999], got 1000" \
   "$hil" run --passivity-drift-gain 1000
 num "sweep --duration nan" "--duration must be" "$hil" sweep --out "$work/sw" --duration nan

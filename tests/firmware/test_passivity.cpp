@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <utility>
 
 #include "lever/fw/passivity.hpp"
 #include "lever/fw/top_role.hpp"
@@ -116,7 +117,8 @@ TEST_CASE("spread over a time constant, the port spends a share of what it holds
   constexpr double kDt = 1e-3, kPower = 0.05;  // 50 mW: 9 N at the 0.1 m handle, yielding at 0.055 rad/s
   for (const double spend_s : {0.0, 0.040}) {
     CAPTURE(spend_s);
-    PassivityPort port({PassivityMode::tdpa, 5.0, 0.0125, spend_s});
+    PassivityPort port(
+        {.mode = PassivityMode::tdpa, .reserve_j = 0.0125, .reserve_share = 1.0, .display_spend_time_s = spend_s});
     port.on_armed();
     port.receive(joules(0.0));
     for (int tick = 0; tick < 20; ++tick) port.limit(-kPower, kDt, spend_s);  // pushes in: 1 mJ kept
@@ -144,9 +146,10 @@ TEST_CASE("spread over a time constant, the port spends a share of what it holds
 }
 
 // The reserve is an account the port's own input refills: a hand that yields to the display (output) and pushes
-// back (input) over and over spends the same millijoules, and only input beyond a full reserve goes to the peer.
+// back (input) over and over spends the same millijoules, and with reserve_share 1 only input beyond a full reserve
+// goes to the peer.
 TEST_CASE("the reserve refills from the port's own input before anything more is passed", "[passivity]") {
-  PassivityPort port({PassivityMode::tdpa, 5.0, 0.010});
+  PassivityPort port({.mode = PassivityMode::tdpa, .reserve_j = 0.010, .reserve_share = 1.0});
   port.on_armed();
   port.receive(joules(0.0));
   port.limit(-15.0, 1e-3);  // 15 mJ in: 10 mJ kept, 5 mJ passed
@@ -170,15 +173,36 @@ TEST_CASE("the reserve refills from the port's own input before anything more is
   CHECK(port.state().observed_j == Approx(0.050).margin(1e-9));
 }
 
+// reserve_share: of each joule taken in, that share fills the reserve while it has room and the rest goes to the
+// peer at once, so a peer that needs energy to follow is not kept waiting until this port's reserve is full.
+TEST_CASE("with a reserve share, each joule taken in is split between the reserve and the peer", "[passivity]") {
+  PassivityPort port({.mode = PassivityMode::tdpa, .reserve_j = 0.010, .reserve_share = 0.8});
+  port.on_armed();
+  port.receive(joules(0.0));
+  port.limit(-5.0, 1e-3);  // 5 mJ in: 4 kept, 1 passed at once
+  CHECK(port.state().kept_j == Approx(0.004).margin(1e-12));
+  CHECK(port.state().passed_j == Approx(0.001).margin(1e-12));
+  CHECK(port.frame(1, false)->energy == 1000u);  // in the next energy frame, in microjoules
+  port.limit(-10.0, 1e-3);                       // 10 mJ in: 8 offered to the reserve, which has room for 6; 4 passed
+  CHECK(port.state().kept_j == Approx(0.010).margin(1e-12));
+  CHECK(port.state().passed_j == Approx(0.005).margin(1e-12));
+  CHECK(port.state().observed_j == Approx(0.010).margin(1e-12));
+  // What the port spends of its reserve refills at the same share.
+  CHECK(port.limit(5.0, 1e-3) == 1.0);
+  port.limit(-5.0, 1e-3);
+  CHECK(port.state().kept_j == Approx(0.009).margin(1e-12));
+  CHECK(port.state().passed_j == Approx(0.006).margin(1e-12));
+}
+
 // Two ports joined by a delayed, lossy link, driven by random power at both ends: whatever each port keeps of
 // its own input (the reserve), the two-port never puts out more than came in. The sum of both inputs less both
 // outputs is the channel's energy; it is checked every tick.
 TEST_CASE("two ports over a delayed lossy link never put out more than came in, with or without a reserve",
           "[passivity]") {
-  for (const double reserve_j : {0.0, 0.0125, 0.5}) {
-    CAPTURE(reserve_j);
-    PassivityPort ports[2] = {PassivityPort({PassivityMode::tdpa, 5.0, reserve_j}),
-                              PassivityPort({PassivityMode::tdpa, 5.0, reserve_j})};
+  for (const auto& [reserve_j, share] : {std::pair{0.0, 1.0}, {0.0125, 1.0}, {0.0125, 0.8}, {0.5, 1.0}, {0.5, 0.3}}) {
+    CAPTURE(reserve_j, share);
+    const PassivityConfig config{.mode = PassivityMode::tdpa, .reserve_j = reserve_j, .reserve_share = share};
+    PassivityPort ports[2] = {PassivityPort(config), PassivityPort(config)};
     for (auto& p : ports) p.on_armed();
     constexpr std::size_t kDelay = 37;  // ticks on the link, each way
     std::optional<EnergyMessage> link[2][kDelay];

@@ -184,6 +184,8 @@ ConfigSchema schema_for(FwConfig& config) {
            "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
   s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",
            "of the port's own input, what it keeps for its own output (0: the literature's per-port TDPA)");
+  s.number("control.passivity.reserve_share", l.passivity.reserve_share, 0.0, 1.0, "",
+           "of each joule the port takes in, the share that may go to its reserve; the rest goes to the peer");
   s.number("control.passivity.display_spend_time_s", l.passivity.display_spend_time_s, 0.0, 10.0, "s",
            "HSI with tdpa: spend the port's energy over this time constant (0: all at once)");
 
