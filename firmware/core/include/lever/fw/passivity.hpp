@@ -181,9 +181,9 @@ class PassivityPort {
   constexpr double available() const noexcept {
     return state_.received_j + state_.input_j - state_.passed_j - state_.output_j;
   }
-  // Under tdpa the input refills the port's reserve first and only what overflows it goes to the peer, so a
-  // hand that yields to the display and pushes back spends and refills the same few millijoules instead of
-  // handing each push-back to the peer, a round trip away from coming back. Only the port's own input is ever
+  // Under tdpa the input refills the port's reserve (its reserve_share of it, while there is room) and the rest
+  // goes to the peer, so a hand that yields to the display and pushes back spends and refills mostly the same few
+  // millijoules instead of handing each push-back to the peer, a round trip away from coming back. Only the port's own input is ever
   // passed (the peer's energy is spent here, never bounced back), and never energy the port has put out: kept
   // shrinks with every output. Under observe the output is not bounded, and the input goes on as it came (all
   // of it beyond the reserve), so the peer's observer sees the channel as it is.
