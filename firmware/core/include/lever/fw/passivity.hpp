@@ -183,10 +183,10 @@ class PassivityPort {
   }
   // Under tdpa the input refills the port's reserve (its reserve_share of it, while there is room) and the rest
   // goes to the peer, so a hand that yields to the display and pushes back spends and refills mostly the same few
-  // millijoules instead of handing each push-back to the peer, a round trip away from coming back. Only the port's own input is ever
-  // passed (the peer's energy is spent here, never bounced back), and never energy the port has put out: kept
-  // shrinks with every output. Under observe the output is not bounded, and the input goes on as it came (all
-  // of it beyond the reserve), so the peer's observer sees the channel as it is.
+  // millijoules instead of handing each push-back to the peer, a round trip away from coming back. Only the port's own
+  // input is ever passed (the peer's energy is spent here, never bounced back), and never energy the port has put out:
+  // kept shrinks with every output. Under observe the output is not bounded, and the input goes on as it came (all of
+  // it beyond the reserve), so the peer's observer sees the channel as it is.
   constexpr void take_in(double energy_j) noexcept {
     state_.input_j += energy_j;
     if (acts()) {
