@@ -252,43 +252,38 @@ TEST_CASE("in contact the TOP's pull aims no further past the lever than the mot
   // The peer's energy: the first frame is the baseline, the second gives plenty.
   top.passivity().receive({0, 0, 1});
   top.passivity().receive({10'000'000, 1, 1});  // 10 J
-  // The HSI at rest 0.1 rad past the wall; every frame carries its position.
-  auto motion_at = [](double position, lever::fw::Tick now, std::uint8_t seq) {
-    lever::protocol::MotionMessage m;
-    m.position = static_cast<std::int16_t>(std::lround(position / lever::protocol::kPositionLsbRad));
-    m.tick = static_cast<std::uint16_t>(now);
-    m.seq = seq;
-    m.flags.restart = seq == 0;
-    return lever::protocol::pack(m, 0);
+  // The HSI at rest at `hsi`, a motion frame (which carries its position) every 20 ticks; the gauge reads `force_n`,
+  // and with `follow` the lever moves freely to its reference.
+  lever::fw::Tick now = 1;
+  double deepest = 0.0;
+  auto run_until = [&](lever::fw::Tick end, double hsi, double force_n, bool follow) {
+    for (; now < end; ++now) {
+      if (now % 20 == 1) {
+        lever::protocol::MotionMessage m;
+        m.position = static_cast<std::int16_t>(std::lround(hsi / lever::protocol::kPositionLsbRad));
+        m.tick = static_cast<std::uint16_t>(now);
+        m.seq = static_cast<std::uint8_t>(now / 20);
+        m.flags.restart = m.seq == 0;
+        bool used = false;
+        top.receive(lever::protocol::pack(m, 0), now, used);
+      }
+      t.force_n = force_n;
+      if (follow) t.position_rad = t.position_ref_rad;
+      top.control(now, 1e-3, t);
+      deepest = std::max(deepest, t.position_ref_rad);
+    }
   };
   // First the HSI where the TOP is, out of contact: the approach after arming ends.
-  lever::fw::Tick now = 1;
-  for (; now < 100; ++now) {
-    bool used = false;
-    if (now % 20 == 1) top.receive(motion_at(0.30, now, static_cast<std::uint8_t>(now / 20)), now, used);
-    t.force_n = 0.0;
-    top.control(now, 1e-3, t);
-  }
+  run_until(100, 0.30, 0.0, false);
   REQUIRE(t.position_ref_rad == Approx(0.30).margin(1e-3));
+  // The HSI 0.1 rad past the wall while the TOP presses it (in contact).
   const double hsi = 0.40;
-  double deepest = 0.0;
-  for (; now < 3000; ++now) {
-    bool used = false;
-    if (now % 20 == 1) top.receive(motion_at(hsi, now, static_cast<std::uint8_t>(now / 20)), now, used);
-    t.force_n = 5.0;  // pressing the wall: in contact
-    top.control(now, 1e-3, t);
-    deepest = std::max(deepest, t.position_ref_rad);
-  }
+  deepest = 0.0;
+  run_until(3000, hsi, 5.0, false);
   // It has pressed in as far as it may (the pull closes the gap at 10/s), and not further.
   CHECK(deepest <= t.position_rad + max_press + 1e-9);
   CHECK(t.position_ref_rad == Approx(t.position_rad + max_press).margin(1e-4));
   // Out of contact the same pull takes it all the way to the HSI.
-  for (; now < 6000; ++now) {
-    bool used = false;
-    if (now % 20 == 1) top.receive(motion_at(hsi, now, static_cast<std::uint8_t>(now / 20)), now, used);
-    t.force_n = 0.0;
-    t.position_rad = t.position_ref_rad;  // following freely
-    top.control(now, 1e-3, t);
-  }
+  run_until(6000, hsi, 0.0, true);
   CHECK(t.position_ref_rad == Approx(hsi).margin(1e-3));
 }
