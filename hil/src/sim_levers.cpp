@@ -1,0 +1,58 @@
+#include "sim_levers.hpp"
+
+#include <stdexcept>
+
+#include "lever/common/rng.hpp"
+
+namespace lever::hil {
+namespace {
+
+// The firmware as the run configures it: the run's codecs, the gauge calibrated to the amplifier, and absolute
+// encoders when the levers do not home.
+fw::LeverConfig firmware_for(const SimConfig& config, fw::LeverConfig fw) {
+  calibrate_for(fw.gauge, config.gauge);
+  if (!config.homing) fw.homing.method = fw::HomingMethod::absolute;
+  return fw;
+}
+
+fw::LeverConfig hsi_firmware(const SimConfig& config) {
+  fw::LeverConfig fw = config.hsi_firmware;
+  fw.motion_codec = config.velocity_codec;
+  return firmware_for(config, fw);
+}
+
+fw::LeverConfig top_firmware(const SimConfig& config) {
+  fw::LeverConfig fw = config.top_firmware;
+  fw.force_codec = config.force_codec;
+  return firmware_for(config, fw);
+}
+
+}  // namespace
+
+PowerUpAngles power_up_angles(const SimConfig& config) {
+  PowerUpAngles a;
+  if (config.homing) {
+    Rng start(config.seed * 4 + 6);
+    a.hsi = start.uniform(-0.4, 0.25);
+    a.top = start.uniform(-0.4, 0.25);
+  }
+  return a;
+}
+
+SimLevers::SimLevers(const SimConfig& config, const PowerUpAngles& angles, Transport& transport, const Nanos& now) {
+  if (!config.gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
+  const fw::LeverConfig hsi_fw = hsi_firmware(config);
+  hsi_ = std::make_unique<LeverSite<SimHsi>>(hsi_fw, angles.hsi, config.gauge, config.seed * 4 + 3, transport.hsi_bus(),
+                                             now);
+  top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, config.gauge, config.seed * 4 + 4,
+                                             transport.top_bus(), now);
+  // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
+  hsi_gauge_used_ = hsi_fw.use_force_sensor && hsi_fw.display.closed_loop;
+}
+
+void SimLevers::sense(double contact_n, double hand_n, fw::Tick tick) {
+  top_->hal.gauge_.update(contact_n, tick);
+  if (hsi_gauge_used_) hsi_->hal.gauge_.update(hand_n, tick);
+}
+
+}  // namespace lever::hil

@@ -1,0 +1,81 @@
+#include "sim_metrics.hpp"
+
+#include <algorithm>
+#include <numbers>
+
+namespace lever::hil {
+
+SimMetrics::SimMetrics(const SimConfig& config)
+    : metrics_(config.jnd, config.jnd_absolute_n),
+      nominal_delay_ticks_(nominal_one_way_delay_ticks(config)),
+      prefilter_delay_ms_(
+          config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0),
+      measured_history_(static_cast<std::size_t>(nominal_delay_ticks_) + 1) {}
+
+void SimMetrics::step(fw::Tick tick, const TickForces& forces, const World& world, const SimLevers& levers) {
+  const bool both_armed = levers.both_armed();
+  measured_history_[static_cast<std::size_t>(tick) % measured_history_.size()] =
+      both_armed ? levers.top().lever->telemetry().force_n : std::nullopt;
+  count_lever_faults(levers);
+  // The controllers' dissipated energy counts from each lever's arming; the run adds it up across re-arms.
+  // It is read from the ports themselves: the telemetry holds it only on the ticks the controllers run.
+  dissipated_[0].add(levers.hsi().lever->role().passivity().state().dissipated_j);
+  dissipated_[1].add(levers.top().lever->role().passivity().state().dissipated_j);
+  if (both_armed) add_armed(tick, forces, world, levers);
+}
+
+// Every fault a lever latched while the scenario ran, injected or not: a delayed loop that trips a lever's own
+// protection (TORQUE_LIMIT, POSITION_LIMIT) has not survived the delay, whatever else it did.
+void SimMetrics::count_lever_faults(const SimLevers& levers) {
+  for (int i = 0; i < 2; ++i) {
+    const auto& supervisor = i == 0 ? levers.hsi().lever->supervisor() : levers.top().lever->supervisor();
+    const bool armed = supervisor.armed();
+    if (was_armed_[i] && !armed && supervisor.state() == fw::LeverState::fault) {
+      ++lever_faults_[i].count;
+      lever_faults_[i].bits |= supervisor.latched();
+    }
+    was_armed_[i] = armed;
+  }
+}
+
+void SimMetrics::add_armed(fw::Tick tick, const TickForces& forces, const World& world, const SimLevers& levers) {
+  const auto& ht = levers.hsi().lever->telemetry();
+  const auto& tt = levers.top().lever->telemetry();
+  refresh_frames_ += ht.sent_refresh + tt.sent_refresh;
+  min_observed_energy_j_[0] = std::min(min_observed_energy_j_[0], ht.observed_energy_j);
+  min_observed_energy_j_[1] = std::min(min_observed_energy_j_[1], tt.observed_energy_j);
+  metrics_.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), forces.displayed,
+                          forces.measured, forces.contact);
+  const auto& sender = levers.top().lever->role().sender().codec_sender();
+  // The oldest entry: nominal_delay_ticks ago.
+  const auto& delayed = measured_history_[static_cast<std::size_t>(tick + 1) % measured_history_.size()];
+  if (tt.force_n && delayed && ht.remote && !sender.model().empty()) {
+    const double lossless = sender.model().at(static_cast<double>(tick - levers.top().boot_tick))[0];
+    const double filtered = sender.prefilter().enabled() ? sender.prefilter().output()[0] : forces.measured;
+    metrics_.add_force_causes(forces.displayed, *delayed, lossless, filtered, forces.measured);
+  }
+}
+
+void SimMetrics::finish(SimResult& result, const SimLevers& levers) const {
+  const auto& hl = *levers.hsi().lever;
+  const auto& tl = *levers.top().lever;
+  metrics_.finish(result);
+  result.nominal_delay_ticks = nominal_delay_ticks_;
+  result.prefilter_delay_ms = prefilter_delay_ms_;
+  result.hsi_lever_faults = lever_faults_[0];
+  result.top_lever_faults = lever_faults_[1];
+  result.refresh_frames = refresh_frames_;
+  result.hsi_min_observed_energy_j = min_observed_energy_j_[0];
+  result.top_min_observed_energy_j = min_observed_energy_j_[1];
+  result.hsi_dissipated_energy_j = dissipated_[0].total_j;
+  result.top_dissipated_energy_j = dissipated_[1].total_j;
+  result.energy_frames = hl.counters().energy_sent + tl.counters().energy_sent;
+  result.hsi_seq_gaps = hl.role().receiver().sequence().missing();
+  result.top_seq_gaps = tl.role().receiver().sequence().missing();
+  result.hsi_overruns = hl.timing().stats().overruns;
+  result.top_overruns = tl.timing().stats().overruns;
+  result.hsi_edges_lost = levers.hsi().hal.encoder_.overflowed();
+  result.top_edges_lost = levers.top().hal.encoder_.overflowed();
+}
+
+}  // namespace lever::hil
