@@ -1,0 +1,40 @@
+#include "sphere_op.hpp"
+
+#include <cmath>
+
+#include "sphere_vec.hpp"
+
+namespace lever::hil {
+namespace {
+constexpr double kTick = 1e-3;
+}  // namespace
+
+SphereOp::SphereOp(const SphereConfig& c, const Vec3& start, const SphereDelays& delays)
+    : c_(c),
+      down_ticks_(delays.down_ticks),
+      velocity_sender_(c.velocity_codec),
+      force_receiver_(c.force_codec.mode),
+      measured_(quantize(start, c.device.resolution_m)),
+      measured_prev_(measured_) {}
+
+void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
+  measured_ = quantize(position, c_.device.resolution_m);
+  for (std::size_t i = 0; i < 3; ++i) velocity_[i] = (measured_[i] - measured_prev_[i]) / kTick;
+  measured_prev_ = measured_;
+  const auto vd = velocity_sender_.offer(t, velocity_);
+  velocity_sent_ = vd.send;
+  if (vd.send) {
+    ++packets_;
+    up.send({t, measured_, vd.wire}, t_ns);
+  }
+}
+
+void SphereOp::display(std::uint64_t k, Nanos t_ns, Downlink& down) {
+  // Computed as the sample times are, so a sample of this clock's time compares equal to it.
+  const double op_clock = static_cast<double>(static_cast<std::int64_t>(k) - down_ticks_) * kTick;
+  down.receive(t_ns, op_clock, [&](const DownPacket& p) { force_receiver_.receive(p.t, p.force); });
+  const auto reconstructed = force_receiver_.reconstruct(op_clock);
+  displayed_ = saturate(reconstructed ? *reconstructed : Vec3{}, c_.device.max_force_n);
+}
+
+}  // namespace lever::hil
