@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lever/hil/human_operator.hpp"
+#include "serve_probe.hpp"
 
 namespace lever::hil {
 
@@ -24,7 +25,7 @@ struct ServeOptions {
 };
 
 // Exit code: 0 done (duration or signal), 1 runtime failure (a device that cannot be opened, the pair never
-// armed), 2 bad input (a configuration).
-int run_serve(const ServeOptions& options, const std::atomic<bool>& stop);
+// armed), 2 bad input (a configuration). `probe`, when given, sees every tick (serve_probe.hpp).
+int run_serve(const ServeOptions& options, const std::atomic<bool>& stop, ServeProbe* probe = nullptr);
 
 }  // namespace lever::hil

@@ -1,0 +1,30 @@
+#pragma once
+// One lever's devices as lever-hil serve plays them, where its lever-fw configuration says they are: the encoder's
+// lines, the motor read back from its PWM tree, and the strain gauge as a Modbus server (for a lever that reads one).
+#include <cmath>
+#include <cstdint>
+#include <optional>
+
+#include "lever/app/fw_config.hpp"
+#include "lever/hil/devices/encoder_lines.hpp"
+#include "lever/hil/devices/gauge_server.hpp"
+#include "lever/hil/devices/motor_readback.hpp"
+
+namespace lever::hil {
+
+struct LeverDevices {
+  std::optional<devices::EncoderLines> encoder;
+  std::optional<devices::MotorReadback> motor;
+  std::optional<devices::GaugeServer> gauge;  // only a lever that reads its gauge has one
+  double counts_per_radian = 0.0;
+  std::int64_t count_origin = 0;  // the count at power-up: an incremental encoder's count starts anywhere
+
+  std::int64_t count_at(double angle) const {
+    return static_cast<std::int64_t>(std::floor(angle * counts_per_radian)) - count_origin;
+  }
+};
+
+// Opens them for a lever powered up at `angle`; on failure says which device and why on stderr, and returns none.
+std::optional<LeverDevices> open_devices(const app::FwConfig& config, double angle, double max_edge_rate_hz);
+
+}  // namespace lever::hil
