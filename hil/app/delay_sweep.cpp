@@ -8,9 +8,10 @@
 #include <vector>
 
 #include "lever/hil/simulation.hpp"
-#include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
+#include "sweep_plots.hpp"
 #include "sweep_runner.hpp"
+#include "sweep_table.hpp"
 
 namespace lever::hil {
 namespace {
@@ -28,100 +29,86 @@ struct Job {
   SimResult result;
 };
 
-// Each metric: its CSV name, its value in the plots' units, and the digits written.
-struct Metric {
-  const char* name;
-  double (*value)(const SimResult&);
-  int digits;
-};
+// Each metric in the plots' units, in both files: sweep.csv with two more decimals than summary.csv.
 double armed_s(const SimResult& r) { return static_cast<double>(r.armed_ticks) * 1e-3; }
-const Metric kMetrics[] = {
-    {"velocity_rate_percent", [](const SimResult& r) { return 100 * r.velocity_packet_rate; }, 2},
-    {"force_rate_percent", [](const SimResult& r) { return 100 * r.force_packet_rate; }, 2},
-    {"energy_frames_per_s", [](const SimResult& r) { return static_cast<double>(r.energy_frames) / armed_s(r); }, 1},
-    {"datagrams_per_s", [](const SimResult& r) { return static_cast<double>(r.network_sent) / armed_s(r); }, 1},
-    {"jnd_violation_percent", [](const SimResult& r) { return 100 * r.force_jnd_violation; }, 2},
-    {"force_rmse_n", [](const SimResult& r) { return r.force_rmse_n; }, 4},
-    {"contact_onsets_per_s", [](const SimResult& r) { return r.contact_onsets_per_s; }, 3},
-    {"protection_trips",
-     [](const SimResult& r) { return static_cast<double>(r.hsi_lever_faults.count + r.top_lever_faults.count); }, 2},
-    {"hsi_dissipated_j", [](const SimResult& r) { return r.hsi_dissipated_energy_j; }, 4},
-    {"top_dissipated_j", [](const SimResult& r) { return r.top_dissipated_energy_j; }, 4},
-    {"hsi_min_observed_j", [](const SimResult& r) { return r.hsi_min_observed_energy_j; }, 4},
-    {"top_min_observed_j", [](const SimResult& r) { return r.top_min_observed_energy_j; }, 4},
-    {"position_rmse_mrad", [](const SimResult& r) { return 1e3 * r.position_rmse_rad; }, 2},
+const SweepMetric<SimResult> kMetrics[] = {
+    {{"velocity_rate_percent", "{:.4f}", "velocity_rate_percent", 1, 2},
+     [](const SimResult& r) { return 100 * r.velocity_packet_rate; }},
+    {{"force_rate_percent", "{:.4f}", "force_rate_percent", 1, 2},
+     [](const SimResult& r) { return 100 * r.force_packet_rate; }},
+    {{"energy_frames_per_s", "{:.3f}", "energy_frames_per_s", 1, 1},
+     [](const SimResult& r) { return static_cast<double>(r.energy_frames) / armed_s(r); }},
+    {{"datagrams_per_s", "{:.3f}", "datagrams_per_s", 1, 1},
+     [](const SimResult& r) { return static_cast<double>(r.network_sent) / armed_s(r); }},
+    {{"jnd_violation_percent", "{:.4f}", "jnd_violation_percent", 1, 2},
+     [](const SimResult& r) { return 100 * r.force_jnd_violation; }},
+    {{"force_rmse_n", "{:.6f}", "force_rmse_n", 1, 4}, [](const SimResult& r) { return r.force_rmse_n; }},
+    {{"contact_onsets_per_s", "{:.5f}", "contact_onsets_per_s", 1, 3},
+     [](const SimResult& r) { return r.contact_onsets_per_s; }},
+    {{"protection_trips", "{:.4f}", "protection_trips", 1, 2},
+     [](const SimResult& r) { return static_cast<double>(r.hsi_lever_faults.count + r.top_lever_faults.count); }},
+    {{"hsi_dissipated_j", "{:.6f}", "hsi_dissipated_j", 1, 4},
+     [](const SimResult& r) { return r.hsi_dissipated_energy_j; }},
+    {{"top_dissipated_j", "{:.6f}", "top_dissipated_j", 1, 4},
+     [](const SimResult& r) { return r.top_dissipated_energy_j; }},
+    {{"hsi_min_observed_j", "{:.6f}", "hsi_min_observed_j", 1, 4},
+     [](const SimResult& r) { return r.hsi_min_observed_energy_j; }},
+    {{"top_min_observed_j", "{:.6f}", "top_min_observed_j", 1, 4},
+     [](const SimResult& r) { return r.top_min_observed_energy_j; }},
+    {{"position_rmse_mrad", "{:.4f}", "position_rmse_mrad", 1, 2},
+     [](const SimResult& r) { return 1e3 * r.position_rmse_rad; }},
 };
-constexpr std::size_t kMetricCount = std::size(kMetrics);
 
-// The summary's column of metric k's mean (gnuplot counts from 1; variant, delay and seeds come first);
-// min and max follow it.
-constexpr int column(int k) { return 4 + 3 * k; }
+PlotPanel panel(const std::string& title, const std::string& ylabel, std::vector<PlotMetric> metrics,
+                const std::string& yrange = "") {
+  return {title, ylabel, yrange, "", std::move(metrics), ""};
+}
 
-std::string gnuplot_script(double p, int seeds) {
-  auto series = [](int k, const char* label) {
-    return fmt::format(
-        "for [i=1:2] file using 2:(strcol(1) eq word(variants,i) ? ${0} : 1/0):{1}:{2} with yerrorlines lc i dt {3} "
-        "title word(variants,i) . \" {4}\"",
-        column(k), column(k) + 1, column(k) + 2, 1 + (k % 2), label);
+PlotSpec plots(double p, int seeds) {
+  const std::string spread =
+      fmt::format("\\nwall-tap, p = {:g} %, mean of {} seed{}; bars: min to max; without = passivity observe", 100 * p,
+                  seeds, seeds == 1 ? "" : "s");
+  PlotSpec s{"lever-hil sweep --over delay",
+             "delay_ms",
+             "one-way delay [ms] (jitter a tenth of it, 1 % loss from 10 ms on)",
+             "",
+             "variant",
+             {},
+             "set offsets graph 0.03, graph 0.03, 0, 0\n",
+             {}};
+  for (const auto& v : kVariants) s.series.emplace_back(v.name);
+  s.figures = {
+      {"delay_packet_rates.png",
+       "1200,520",
+       "packet rates against delay" + spread,
+       {panel("data frames", "packet rate [% of 1 kHz]",
+              {{"velocity_rate_percent", "velocity"}, {"force_rate_percent", "force"}}, "[0:*]"),
+        panel("on the link", "frames or datagrams per second",
+              {{"energy_frames_per_s", "energy frames/s"}, {"datagrams_per_s", "datagrams/s"}})}},
+      {"delay_force_error.png",
+       "1200,520",
+       "displayed force against delay" + spread,
+       {panel("off by more than a JND", "share of time [%]", {{"jnd_violation_percent", ""}}),
+        panel("RMS error against the TOP's measurement", "force RMSE [N]", {{"force_rmse_n", ""}})}},
+      {"delay_chatter.png",
+       "1200,520",
+       "contact against delay" + spread,
+       {panel("chatter: the TOP's wall contact beginning", "contact onsets per second", {{"contact_onsets_per_s", ""}}),
+        panel("protection trips (TORQUE_LIMIT, POSITION_LIMIT, PEER_STATE)", "armed -> fault, both levers, per run",
+              {{"protection_trips", ""}})}},
+      {"delay_energy.png",
+       "1200,520",
+       "passivity against delay" + spread,
+       {panel("energy the controllers dissipated", "energy [J]",
+              {{"hsi_dissipated_j", "HSI"}, {"top_dissipated_j", "TOP"}}),
+        panel("the observers' lowest energy (below 0: the channel made energy)", "",
+              {{"hsi_min_observed_j", "HSI"}, {"top_min_observed_j", "TOP"}}, "[*:*]")}},
+      {"delay_position.png",
+       "900,650",
+       "TOP position error (RMS against the HSI)" + spread,
+       {panel("", "position RMSE [mrad]", {{"position_rmse_mrad", ""}}, "[0:*]")}},
   };
-  return fmt::format(
-      R"gp(# lever-hil sweep --over delay: plots from summary.csv beside this script; `gnuplot plots.gp` redraws them.
-{0}file = dir . "summary.csv"
-set terminal pngcairo size 1200,520 font ",11" noenhanced
-set datafile separator ","
-set offsets graph 0.03, graph 0.03, 0, 0
-set key below horizontal
-set grid
-set xlabel "one-way delay [ms] (jitter a tenth of it, 1 % loss from 10 ms on)"
-variants = "without tdpa"
-spread = "wall-tap, p = {1:g} %, mean of {2} seed{3}; bars: min to max; without = passivity observe"
-set output dir . "delay_packet_rates.png"
-set multiplot layout 1,2 title "packet rates against delay\n" . spread
-set title "data frames"
-set ylabel "packet rate [% of 1 kHz]"
-set yrange [0:*]
-plot {4}, {5}
-set title "on the link"
-set ylabel "frames or datagrams per second"
-plot {6}, {7}
-unset multiplot
-set output dir . "delay_force_error.png"
-set multiplot layout 1,2 title "displayed force against delay\n" . spread
-set title "off by more than a JND"
-set ylabel "share of time [%]"
-plot {8}
-set title "RMS error against the TOP's measurement"
-set ylabel "force RMSE [N]"
-plot {9}
-unset multiplot
-set output dir . "delay_chatter.png"
-set multiplot layout 1,2 title "contact against delay\n" . spread
-set title "chatter: the TOP's wall contact beginning"
-set ylabel "contact onsets per second"
-plot {10}
-set title "protection trips (TORQUE_LIMIT, POSITION_LIMIT, PEER_STATE)"
-set ylabel "armed -> fault, both levers, per run"
-plot {11}
-unset multiplot
-set output dir . "delay_energy.png"
-set multiplot layout 1,2 title "passivity against delay\n" . spread
-set title "energy the controllers dissipated"
-set ylabel "energy [J]"
-plot {12}, {13}
-set title "the observers' lowest energy (below 0: the channel made energy)"
-set yrange [*:*]
-plot {14}, {15}
-unset multiplot
-set terminal pngcairo size 900,650 font ",11" noenhanced
-set output dir . "delay_position.png"
-set title "TOP position error (RMS against the HSI)\n" . spread
-set ylabel "position RMSE [mrad]"
-set yrange [0:*]
-plot {16}
-)gp",
-      kGnuplotScriptDir, 100 * p, seeds, seeds == 1 ? "" : "s", series(0, "velocity"), series(1, "force"),
-      series(2, "energy frames/s"), series(3, "datagrams/s"), series(4, ""), series(5, ""), series(6, ""),
-      series(7, ""), series(8, "HSI"), series(9, "TOP"), series(10, "HSI"), series(11, "TOP"), series(12, ""));
+  return s;
 }
 
 }  // namespace
@@ -161,33 +148,13 @@ int run_delay_sweep(const SweepOptions& o) {
         return fmt::format("{} {:g} ms seed {}", jobs[i].variant->name, jobs[i].delay_ms, jobs[i].seed);
       });
 
-  std::string runs = "variant,delay_ms,seed";
-  std::string summary = "variant,delay_ms,seeds";
-  for (const auto& m : kMetrics) {
-    runs += fmt::format(",{}", m.name);
-    summary += fmt::format(",{0},{0}_min,{0}_max", m.name);
+  SweepTable table("variant,delay_ms", "variant,delay_ms", sweep_columns(kMetrics));
+  for (const Job& job : jobs) {
+    const std::string keys = fmt::format("{},{:g}", job.variant->name, job.delay_ms);
+    table.add_run(keys, job.seed, sweep_values(kMetrics, job.result));
+    if (job.seed == static_cast<std::uint64_t>(o.seeds)) table.end_point(keys);
   }
-  runs += "\n";
-  summary += "\n";
-  for (std::size_t i = 0; i < jobs.size(); i += static_cast<std::size_t>(o.seeds)) {
-    Spread spread[kMetricCount];
-    for (int s = 0; s < o.seeds; ++s) {
-      const Job& job = jobs[i + static_cast<std::size_t>(s)];
-      runs += fmt::format("{},{:g},{}", job.variant->name, job.delay_ms, job.seed);
-      for (std::size_t k = 0; k < kMetricCount; ++k) {
-        const double x = kMetrics[k].value(job.result);
-        runs += fmt::format(",{:.{}f}", x, kMetrics[k].digits + 2);
-        spread[k].add(x);
-      }
-      runs += "\n";
-    }
-    summary += fmt::format("{},{:g},{}", jobs[i].variant->name, jobs[i].delay_ms, o.seeds);
-    for (std::size_t k = 0; k < kMetricCount; ++k) summary += spread[k].csv(o.seeds, 1.0, kMetrics[k].digits);
-    summary += "\n";
-  }
-  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
-  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
-  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(o.p, o.seeds), "--out");
+  write_sweep(dir, table, gnuplot_script(plots(o.p, o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

@@ -10,11 +10,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "lever/program/exit_codes.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
 #include "sweep.hpp"
+#include "sweep_plots.hpp"
 #include "sweep_runner.hpp"
+#include "sweep_table.hpp"
 
 namespace lever::hil {
 namespace {
@@ -61,43 +62,60 @@ constexpr char kPaperPoints[] =
     "force,3-DoF LP+filter,2.5,7.4,7.4 % for force at 2.5 %\n"
     "velocity,3-DoF LP+filter,7.5,8.7,8.7 % for velocity at 7.5 %\n";
 
-std::string gnuplot_script() {
-  return fmt::format(R"gp({0}set terminal pngcairo size 1200,520 font ",11"
-set datafile separator ","
-set grid
-set key top right
-set xlabel "deadband parameter p [%]"
-set xrange [0:40]
-file = dir . "summary.csv"
-paper = dir . "paper_fig12.csv"
-v(i) = i == 1 ? "3-DoF" : i == 2 ? "3-DoF LP" : "3-DoF LP+filter"
-set output dir . "fig12_packet_rates.png"
-set multiplot layout 1,2 title "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text)"
-set ylabel "packet rate [% of 1 kHz]"
-set yrange [0:100]
-set title "velocity OP -> TOP (deadband on velocity)"
-plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $4 : 1/0) with linespoints lc i dt i title v(i), \
-     for [i=1:3] paper using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $4 : 1/0) with points pt 7 ps 1.6 lc i title "paper ".v(i)
-set title "force TOP -> OP (deadband on force)"
-plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $5 : 1/0) with linespoints lc i dt i title v(i), \
-     for [i=1:3] paper using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $4 : 1/0) with points pt 7 ps 1.6 lc i title "paper ".v(i)
-unset multiplot
-set output dir . "distortion.png"
-set multiplot layout 1,2 title "sphere-3dof: displayed force off the undistorted system's by more than a JND"
-set ylabel "share of time [%]"
-set yrange [0:*]
-set title "deadband on velocity"
-plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $6 : 1/0) with linespoints lc i dt i title v(i)
-set title "deadband on force"
-plot for [i=1:3] file using 3:((strcol(1) eq "force" && strcol(2) eq v(i)) ? $6 : 1/0) with linespoints lc i dt i title v(i)
-unset multiplot
-set terminal pngcairo size 900,600 font ",11"
-set output dir . "position_error.png"
-set title "sphere-3dof: TOP position error, deadband on velocity"
-set ylabel "position RMSE [um]"
-plot for [i=1:3] file using 3:((strcol(1) eq "velocity" && strcol(2) eq v(i)) ? $9 : 1/0) with linespoints lc i dt i title v(i)
-)gp",
-                     kGnuplotScriptDir);
+const SweepMetric<SphereResult> kMetrics[] = {
+    {{"velocity_packet_rate", "{:.6f}", "velocity_rate_percent", 100, 2},
+     [](const SphereResult& r) { return r.velocity_packet_rate; }},
+    {{"force_packet_rate", "{:.6f}", "force_rate_percent", 100, 2},
+     [](const SphereResult& r) { return r.force_packet_rate; }},
+    {{"force_jnd_violation", "{:.6f}", "jnd_violation_percent", 100, 2},
+     [](const SphereResult& r) { return r.force_jnd_violation; }},
+    {{"downlink_jnd_violation", "{:.6f}", "downlink_jnd_violation_percent", 100, 2},
+     [](const SphereResult& r) { return r.downlink_jnd_violation; }},
+    {{"contact_share", "{:.6f}", "contact_percent", 100, 1}, [](const SphereResult& r) { return r.contact_share; }},
+    {{"position_rmse_m", "{:.6g}", "position_rmse_um", 1e6, 1},
+     [](const SphereResult& r) { return r.position_rmse_m; }},
+    {{"force_rmse_n", "{:.6g}", "force_rmse_n", 1, 4}, [](const SphereResult& r) { return r.force_rmse_n; }},
+    {{"realtime_factor", "{:.0f}", nullptr, 1, 0}, [](const SphereResult& r) { return r.realtime_factor; }},
+};
+
+// One direction's deadband: the rows of that direction, and in the packet rates the paper's points.
+PlotPanel panel(const char* direction, const std::string& title, const std::string& metric, bool paper = false) {
+  const std::string row = fmt::format("strcol(\"direction\") eq \"{}\"", direction);
+  PlotPanel p{title, "", "", row, {{metric, ""}}, ""};
+  if (paper)
+    p.extra = fmt::format(
+        "for [i=1:3] paper using \"p_percent\":(({} && strcol(\"variant\") eq series(i)) ? column(\"rate_percent\") "
+        ": 1/0) with points pt 7 ps 1.6 lc i title \"paper \".series(i)",
+        row);
+  return p;
+}
+
+PlotSpec plots(int seeds) {
+  const std::string spread = fmt::format("\\nmean of {} seed{}; bars: min to max", seeds, seeds == 1 ? "" : "s");
+  PlotSpec s{"lever-hil sweep --scenario sphere-3dof", "p_percent", "deadband parameter p [%]", "[0:40]", "variant", {},
+             "paper = dir . \"paper_fig12.csv\"\n",    {}};
+  for (const auto& v : kVariants) s.series.emplace_back(v.name);
+  PlotPanel velocity_rate =
+      panel("velocity", "velocity OP -> TOP (deadband on velocity)", "velocity_rate_percent", true);
+  velocity_rate.ylabel = "packet rate [% of 1 kHz]";
+  velocity_rate.yrange = "[0:100]";
+  PlotPanel velocity_distortion = panel("velocity", "deadband on velocity", "jnd_violation_percent");
+  velocity_distortion.ylabel = "share of time [%]";
+  velocity_distortion.yrange = "[0:*]";
+  PlotPanel position = panel("velocity", "", "position_rmse_um");
+  position.ylabel = "position RMSE [um]";
+  s.figures = {
+      {"fig12_packet_rates.png",
+       "1200,520",
+       "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text)" + spread,
+       {velocity_rate, panel("force", "force TOP -> OP (deadband on force)", "force_rate_percent", true)}},
+      {"distortion.png",
+       "1200,520",
+       "sphere-3dof: displayed force off the undistorted system's by more than a JND" + spread,
+       {velocity_distortion, panel("force", "deadband on force", "jnd_violation_percent")}},
+      {"position_error.png", "900,600", "sphere-3dof: TOP position error, deadband on velocity" + spread, {position}},
+  };
+  return s;
 }
 
 constexpr const char* kTraceHeader =
@@ -246,39 +264,16 @@ int run_sphere_sweep(const SweepOptions& o) {
                            job.seed);
       });
 
-  std::string runs =
-      "direction,variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,downlink_jnd_violation,"
-      "contact_share,"
-      "position_rmse_m,force_rmse_n,realtime_factor\n";
-  std::string summary =
-      "direction,variant,p_percent,velocity_rate_percent,force_rate_percent,jnd_violation_percent,"
-      "downlink_jnd_violation_percent,contact_percent,position_rmse_um,force_rmse_n\n";
-  for (std::size_t i = 0; i < jobs.size(); i += static_cast<std::size_t>(o.seeds)) {
-    double v = 0, f = 0, jnd = 0, down = 0, contact = 0, pos = 0, frms = 0;
-    for (int s = 0; s < o.seeds; ++s) {
-      const Job& job = jobs[i + static_cast<std::size_t>(s)];
-      const SphereResult& r = job.result;
-      runs += fmt::format("{},{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6g},{:.6g},{:.0f}\n",
-                          direction_name(job.direction), job.variant->name, job.p, job.seed, r.velocity_packet_rate,
-                          r.force_packet_rate, r.force_jnd_violation, r.downlink_jnd_violation, r.contact_share,
-                          r.position_rmse_m, r.force_rmse_n, r.realtime_factor);
-      v += r.velocity_packet_rate;
-      f += r.force_packet_rate;
-      jnd += r.force_jnd_violation;
-      down += r.downlink_jnd_violation;
-      contact += r.contact_share;
-      pos += r.position_rmse_m;
-      frms += r.force_rmse_n;
-    }
-    const double n = o.seeds;
-    summary += fmt::format("{},{},{},{:.2f},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.4f}\n",
-                           direction_name(jobs[i].direction), jobs[i].variant->name, 100 * jobs[i].p, 100 * v / n,
-                           100 * f / n, 100 * jnd / n, 100 * down / n, 100 * contact / n, 1e6 * pos / n, frms / n);
+  SweepTable table("direction,variant,p", "direction,variant,p_percent", sweep_columns(kMetrics));
+  for (const Job& job : jobs) {
+    const char* direction = direction_name(job.direction);
+    table.add_run(fmt::format("{},{},{}", direction, job.variant->name, job.p), job.seed,
+                  sweep_values(kMetrics, job.result));
+    if (job.seed == static_cast<std::uint64_t>(o.seeds))
+      table.end_point(fmt::format("{},{},{}", direction, job.variant->name, 100 * job.p));
   }
-  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
-  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
+  write_sweep(dir, table, gnuplot_script(plots(o.seeds)));
   program::OutputFile::write_all((dir / "paper_fig12.csv").string(), kPaperPoints, "--out");
-  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(), "--out");
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

@@ -4,15 +4,14 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <limits>
 #include <vector>
 
 #include "lever/hil/simulation.hpp"
-#include "lever/program/exit_codes.hpp"
-#include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
 #include "report.hpp"
+#include "sweep_plots.hpp"
 #include "sweep_runner.hpp"
+#include "sweep_table.hpp"
 
 namespace lever::hil {
 namespace {
@@ -41,47 +40,51 @@ struct Job {
   SimResult result;
 };
 
-// The plot script names no path: it finds its data beside itself (ARG0, set however gnuplot is started), so
-// a directory's name is data and never gnuplot code, and the script runs from any directory.
-std::string gnuplot_script(const std::string& scenario, int seeds) {
-  return fmt::format(R"gp(# lever-hil sweep: plots from summary.csv beside this script; run it as `gnuplot plots.gp`.
-{2}file = dir . "summary.csv"
-set terminal pngcairo size 900,650 font ",11"
-set datafile separator ","
-# The legend below the plot, never over the curves.
-set key below horizontal
-set grid
-set xlabel "deadband parameter p [%]"
-set xrange [0:25]
-spread = "mean of {1} seed{3}; bars: min to max"
-variants = "deadband predictive predictive+filter deadband+floor predictive+filter+floor"
-# columns: variant,p_percent,seeds, then mean,min,max of each metric
-set output dir . "packet_rate_velocity.png"
-set title "{0}: velocity packets HSI -> TOP (cf. the paper's Fig. 8)\n" . spread
-set ylabel "packet rate [% of 1 kHz]"
-set yrange [0:100]
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $4 : 1/0):5:6 with yerrorlines title word(variants,i), \
-     "-" using 1:2 with points pt 7 ps 1.5 lc rgb "black" title "paper, Fig. 8"
-10,25
-e
-set output dir . "packet_rate_force.png"
-set title "{0}: force packets TOP -> HSI (cf. the paper's Fig. 8)\n" . spread
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $7 : 1/0):8:9 with yerrorlines title word(variants,i), \
-     "-" using 1:2 with points pt 7 ps 1.5 lc rgb "black" title "paper, Fig. 8"
-2.5,10
-10,15
-e
-set output dir . "distortion.png"
-set title "{0}: displayed force off by more than a JND\n" . spread
-set ylabel "share of time [%]"
-set yrange [0:*]
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $10 : 1/0):11:12 with yerrorlines title word(variants,i)
-set output dir . "position_error.png"
-set title "{0}: TOP position error (RMS against the HSI)\n" . spread
-set ylabel "position RMSE [mrad]"
-plot for [i=1:5] file using 2:(strcol(1) eq word(variants,i) ? $13 : 1/0):14:15 with yerrorlines title word(variants,i)
-)gp",
-                     scenario, seeds, kGnuplotScriptDir, seeds == 1 ? "" : "s");
+// Each run's metrics: sweep.csv's in the run's units, summary.csv's scaled (percent, mrad).
+const SweepMetric<SimResult> kMetrics[] = {
+    {{"velocity_packet_rate", "{:.6f}", "velocity_rate_percent", 100, 2},
+     [](const SimResult& r) { return r.velocity_packet_rate; }},
+    {{"force_packet_rate", "{:.6f}", "force_rate_percent", 100, 2},
+     [](const SimResult& r) { return r.force_packet_rate; }},
+    {{"force_jnd_violation", "{:.6f}", "jnd_violation_percent", 100, 2},
+     [](const SimResult& r) { return r.force_jnd_violation; }},
+    {{"position_rmse", "{:.6g}", "position_rmse_mrad", 1000, 3},
+     [](const SimResult& r) { return r.position_rmse_rad; }},
+    {{"force_rmse", "{:.6g}", "force_rmse_n", 1, 4}, [](const SimResult& r) { return r.force_rmse_n; }},
+    {{"bus_load", "{:.6f}", nullptr, 1, 0},
+     [](const SimResult& r) { return std::max(r.bus_load_hsi, r.bus_load_top); }},
+    {{"realtime_factor", "{:.0f}", nullptr, 1, 0}, [](const SimResult& r) { return r.realtime_factor; }},
+};
+
+PlotPanel panel(const std::string& metric, const std::string& ylabel = "", const std::string& yrange = "",
+                const std::string& paper = "") {
+  return {"", ylabel, yrange, "", {{metric, ""}}, paper};
+}
+
+PlotSpec plots(const std::string& scenario, int seeds) {
+  const std::string spread = fmt::format("\\nmean of {} seed{}; bars: min to max", seeds, seeds == 1 ? "" : "s");
+  const std::string paper = "\"-\" using 1:2 with points pt 7 ps 1.5 lc rgb \"black\" title \"paper, Fig. 8\"\n";
+  PlotSpec p{"lever-hil sweep", "p_percent", "deadband parameter p [%]", "[0:25]", "variant", {}, "", {}};
+  for (const auto& v : kVariants) p.series.emplace_back(v.name);
+  p.figures = {
+      {"packet_rate_velocity.png",
+       "900,650",
+       scenario + ": velocity packets HSI -> TOP (cf. the paper's Fig. 8)" + spread,
+       {panel("velocity_rate_percent", "packet rate [% of 1 kHz]", "[0:100]", paper + "10,25\ne\n")}},
+      {"packet_rate_force.png",
+       "900,650",
+       scenario + ": force packets TOP -> HSI (cf. the paper's Fig. 8)" + spread,
+       {panel("force_rate_percent", "", "", paper + "2.5,10\n10,15\ne\n")}},
+      {"distortion.png",
+       "900,650",
+       scenario + ": displayed force off by more than a JND" + spread,
+       {panel("jnd_violation_percent", "share of time [%]", "[0:*]")}},
+      {"position_error.png",
+       "900,650",
+       scenario + ": TOP position error (RMS against the HSI)" + spread,
+       {panel("position_rmse_mrad", "position RMSE [mrad]")}},
+  };
+  return p;
 }
 
 }  // namespace
@@ -115,38 +118,13 @@ int run_sweep(const SweepOptions& o) {
         return fmt::format("{} p={:.1f} % seed {}", jobs[i].variant->name, 100 * jobs[i].p, jobs[i].seed);
       });
 
-  std::string runs =
-      "variant,p,seed,velocity_packet_rate,force_packet_rate,force_jnd_violation,position_rmse,"
-      "force_rmse,bus_load,realtime_factor\n";
-
-  std::string summary = "variant,p_percent,seeds";
-  for (const char* m :
-       {"velocity_rate_percent", "force_rate_percent", "jnd_violation_percent", "position_rmse_mrad", "force_rmse_n"})
-    summary += fmt::format(",{0},{0}_min,{0}_max", m);
-  summary += "\n";
-  for (std::size_t i = 0; i < jobs.size(); i += static_cast<std::size_t>(o.seeds)) {
-    Spread v, f, jnd, pos, frms;
-    for (int s = 0; s < o.seeds; ++s) {
-      const Job& job = jobs[i + static_cast<std::size_t>(s)];
-      const SimResult& r = job.result;
-      runs +=
-          fmt::format("{},{},{},{:.6f},{:.6f},{:.6f},{:.6g},{:.6g},{:.6f},{:.0f}\n", job.variant->name, job.p, job.seed,
-                      r.velocity_packet_rate, r.force_packet_rate, r.force_jnd_violation, r.position_rmse_rad,
-                      r.force_rmse_n, std::max(r.bus_load_hsi, r.bus_load_top), r.realtime_factor);
-      v.add(r.velocity_packet_rate);
-      f.add(r.force_packet_rate);
-      jnd.add(r.force_jnd_violation);
-      pos.add(r.position_rmse_rad);
-      frms.add(r.force_rmse_n);
-    }
-    const int n = o.seeds;
-    summary += fmt::format("{},{},{}{}{}{}{}{}\n", jobs[i].variant->name, 100 * jobs[i].p, n, v.csv(n, 100, 2),
-                           f.csv(n, 100, 2), jnd.csv(n, 100, 2), pos.csv(n, 1000, 3), frms.csv(n, 1, 4));
+  SweepTable table("variant,p", "variant,p_percent", sweep_columns(kMetrics));
+  for (const Job& job : jobs) {
+    table.add_run(fmt::format("{},{}", job.variant->name, job.p), job.seed, sweep_values(kMetrics, job.result));
+    if (job.seed == static_cast<std::uint64_t>(o.seeds))
+      table.end_point(fmt::format("{},{}", job.variant->name, 100 * job.p));
   }
-  program::OutputFile::write_all((dir / "sweep.csv").string(), runs, "--out");
-  program::OutputFile::write_all((dir / "summary.csv").string(), summary, "--out");
-  program::OutputFile::write_all((dir / "plots.gp").string(), gnuplot_script(scenario_name(o.scenario), o.seeds),
-                                 "--out");
+  write_sweep(dir, table, gnuplot_script(plots(scenario_name(o.scenario), o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

@@ -67,6 +67,12 @@ void run_in_parallel(std::size_t count, int threads, std::size_t every, const st
   if (tty) fmt::print(stderr, "\n");
 }
 
+void write_sweep(const std::filesystem::path& dir, const SweepTable& table, const std::string& plot_script) {
+  program::OutputFile::write_all((dir / "sweep.csv").string(), table.runs_csv(), "--out");
+  program::OutputFile::write_all((dir / "summary.csv").string(), table.summary_csv(), "--out");
+  program::OutputFile::write_all((dir / "plots.gp").string(), plot_script, "--out");
+}
+
 int plot_sweep(const std::filesystem::path& dir) {
   const int status = run_gnuplot(dir / "plots.gp");
   if (status == 0) return 0;

@@ -11,20 +11,9 @@
 #include <limits>
 #include <string>
 
-namespace lever::hil {
+#include "sweep_table.hpp"
 
-// One metric over the seeds of a point: mean, min and max, written in the plots' units.
-struct Spread {
-  double sum = 0, min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
-  void add(double x) {
-    sum += x;
-    min = std::min(min, x);
-    max = std::max(max, x);
-  }
-  std::string csv(int n, double scale, int digits) const {
-    return fmt::format(",{:.{}f},{:.{}f},{:.{}f}", scale * sum / n, digits, scale * min, digits, scale * max, digits);
-  }
-};
+namespace lever::hil {
 
 // Makes the output directory, refusing one that is a file and any of `files` in it that is not a regular file.
 void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files);
@@ -41,6 +30,8 @@ inline constexpr const char* kGnuplotScriptDir =
 // on a terminal, one line every `every` runs otherwise. label(i) names run i in it.
 void run_in_parallel(std::size_t count, int threads, std::size_t every, const std::function<void(std::size_t)>& run,
                      const std::function<std::string(std::size_t)>& label);
+// Writes the table's sweep.csv and summary.csv and the plot script plots.gp into the directory.
+void write_sweep(const std::filesystem::path& dir, const SweepTable& table, const std::string& plot_script);
 // Runs the directory's plots.gp; on failure says so and where the CSV files are. Returns the exit code.
 int plot_sweep(const std::filesystem::path& dir);
 
