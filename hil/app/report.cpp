@@ -62,7 +62,34 @@ nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
   return {{"count", f.count}, {"faults", names}};
 }
 
-nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
+// What the run was configured with.
+nlohmann::json parameters_json(const SimConfig& config) {
+  return {{"velocity", codec_json(config.velocity_codec)},
+          {"force", codec_json(config.force_codec)},
+          {"topology", config.topology == Topology::one_site ? "one-site" : "two-sites"},
+          {"delay_ms", config.network.delay_ms},
+          {"jitter_ms", config.network.jitter_ms},
+          {"loss", config.network.loss},
+          {"comms_timeout_ms", config.top_firmware.comms_timeout},
+          {"rest_repeat_ms", config.top_firmware.rest_repeat},
+          {"passivity", fw::name(config.top_firmware.passivity.mode)},
+          {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
+          {"passivity_reserve_share", config.top_firmware.passivity.reserve_share},
+          {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},
+          {"passivity_drift_gain_per_s", config.top_firmware.passivity.drift_gain_per_s},
+          {"homing", config.homing},
+          {"jnd", config.jnd},
+          {"jnd_absolute_n", config.jnd_absolute_n},
+          {"substeps", config.substeps},
+          {"wall_stiffness", config.wall.stiffness},
+          {"gauge_noise_n", config.gauge.noise_n},
+          {"gauge_filter_hz", config.gauge.filter_hz},
+          {"gauge_rate_hz", config.gauge.output_rate_hz()},
+          {"gauge_step_n", config.gauge.step_n}};
+}
+
+// Each injected fault and each lever's reaction to it.
+nlohmann::json faults_json(const SimResult& r) {
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : r.faults) {
     faults.push_back(
@@ -74,6 +101,10 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
          {"hsi", reaction_json(f.hsi, f.spec.start_s)},
          {"top", reaction_json(f.top, f.spec.start_s)}});
   }
+  return faults;
+}
+
+nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
   return {
       {"scenario", scenario_name(config.scenario)},
       {"duration_s", config.duration_s},
@@ -110,35 +141,53 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"homed_at_s", r.homed_at_s},
       {"overruns", {{"hsi", r.hsi_overruns}, {"top", r.top_overruns}}},
       {"encoder_edges_lost", {{"hsi", r.hsi_edges_lost}, {"top", r.top_edges_lost}}},
-      {"faults", faults},
+      {"faults", faults_json(r)},
       {"lever_faults",
        {{"hsi", lever_faults_json(r.hsi_lever_faults)}, {"top", lever_faults_json(r.top_lever_faults)}}},
-      {"parameters",
-       {{"velocity", codec_json(config.velocity_codec)},
-        {"force", codec_json(config.force_codec)},
-        {"topology", config.topology == Topology::one_site ? "one-site" : "two-sites"},
-        {"delay_ms", config.network.delay_ms},
-        {"jitter_ms", config.network.jitter_ms},
-        {"loss", config.network.loss},
-        {"comms_timeout_ms", config.top_firmware.comms_timeout},
-        {"rest_repeat_ms", config.top_firmware.rest_repeat},
-        {"passivity", fw::name(config.top_firmware.passivity.mode)},
-        {"passivity_reserve_j", config.top_firmware.passivity.reserve_j},
-        {"passivity_reserve_share", config.top_firmware.passivity.reserve_share},
-        {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},
-        {"passivity_drift_gain_per_s", config.top_firmware.passivity.drift_gain_per_s},
-        {"homing", config.homing},
-        {"jnd", config.jnd},
-        {"jnd_absolute_n", config.jnd_absolute_n},
-        {"substeps", config.substeps},
-        {"wall_stiffness", config.wall.stiffness},
-        {"gauge_noise_n", config.gauge.noise_n},
-        {"gauge_filter_hz", config.gauge.filter_hz},
-        {"gauge_rate_hz", config.gauge.output_rate_hz()},
-        {"gauge_step_n", config.gauge.step_n}}},
+      {"parameters", parameters_json(config)},
       {"realtime_factor", r.realtime_factor},
       {"wall_time_s", r.wall_time_s},
   };
+}
+
+void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
+  fmt::print(out, "{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n",
+             scenario_name(c.scenario), c.duration_s, c.seed,
+             c.velocity_codec.mode == codec::Mode::predictive ? "predictive" : "deadband", c.velocity_codec.p,
+             c.velocity_codec.floor, c.force_codec.mode == codec::Mode::predictive ? "predictive" : "deadband",
+             c.force_codec.p, c.force_codec.floor);
+  fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
+             100 * r.force_packet_rate);
+  fmt::print(out,
+             "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
+             1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
+  fmt::print(
+      out,
+      "  by cause: {:.1f} % beside the measurement {} tick(s) earlier (codec, filter, loss, jitter); codec alone "
+      "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
+      100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
+      100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
+  fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
+             100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
+             r.realtime_factor);
+  if (c.homing)
+    fmt::print(out, "  before the scenario: both levers powered up at random angles, homed and armed after {:.2f} s\n",
+               r.homed_at_s);
+  if (r.hsi_overruns + r.top_overruns + r.hsi_edges_lost + r.top_edges_lost > 0)
+    fmt::print(out, "  late steps: HSI {}, TOP {}; encoder edges lost: HSI {}, TOP {}\n", r.hsi_overruns,
+               r.top_overruns, r.hsi_edges_lost, r.top_edges_lost);
+  for (const auto& f : r.faults) {
+    auto say = [](const FaultReport::LeverReaction& x) {
+      if (!x.fault_at_s) return std::string("no fault raised");
+      std::string names;
+      for (const auto bit : protocol::kAllFaults)
+        if (protocol::has(x.latched, bit)) names += (names.empty() ? "" : "+") + std::string(name(bit));
+      return fmt::format("fault at {:.3f} s ({}), safe at {:.3f} s, max torque {:.2f} N m, re-armed {}", *x.fault_at_s,
+                         names, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
+                         x.rearmed_at_s ? fmt::format("at {:.3f} s", *x.rearmed_at_s) : "never");
+    };
+    fmt::print(out, "  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));
+  }
 }
 
 }  // namespace lever::hil

@@ -1,5 +1,6 @@
 #pragma once
-// lever-hil's JSON report of one run.
+// lever-hil run's report of one run (JSON or human) and its per-tick trace CSV.
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "lever/hil/simulation.hpp"
@@ -7,6 +8,8 @@
 namespace lever::hil {
 
 nlohmann::json report_json(const SimConfig& config, const SimResult& result);
+// The same for a person: a few lines.
+void print_report(std::FILE* out, const SimConfig& config, const SimResult& result);
 std::string scenario_name(ScenarioKind kind);
 
 // The per-tick trace CSV that run and serve write: the header line and one row, each ending in a newline.

@@ -1,0 +1,26 @@
+#pragma once
+// The names lever-hil's options take, each with the value it stands for.
+#include "lever/codec/config.hpp"
+#include "lever/fw/lever_config.hpp"
+#include "lever/hil/human_operator.hpp"
+#include "lever/hil/simulation.hpp"
+#include "lever/program/choices.hpp"
+#include "sweep.hpp"
+
+namespace lever::hil {
+
+inline const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
+                                                       {"free-motion", ScenarioKind::free_motion},
+                                                       {"press-hold", ScenarioKind::press_hold},
+                                                       {"sphere-3dof", ScenarioKind::sphere_3dof}};
+inline const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site},
+                                                    {"two-sites", Topology::two_sites}};
+inline const program::Choices<fw::MotionVelocity> kMotionVelocities{{"difference", fw::MotionVelocity::difference},
+                                                                    {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
+inline const program::Choices<fw::PassivityMode> kPassivity{
+    {"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}};
+inline const program::Choices<codec::Mode> kModes{{"deadband", codec::Mode::deadband},
+                                                  {"predictive", codec::Mode::predictive}};
+
+}  // namespace lever::hil

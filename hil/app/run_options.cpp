@@ -1,0 +1,245 @@
+#include "run_options.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "cli_choices.hpp"
+#include "lever/program/numbers.hpp"
+#include "lever/program/parse.hpp"
+#include "lever/program/text.hpp"
+
+namespace lever::hil {
+namespace {
+
+// Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
+constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
+constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
+constexpr program::Bounds kSpendSeconds{0.0, 10.0, false, false, "a time in s"};
+constexpr program::Bounds kDriftGain{0.0, 999.0, false, false, "a rate in 1/s"};
+constexpr program::Bounds kShare{0.0, 1.0, false, false, "a share"};
+constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
+constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
+// A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
+constexpr program::Bounds kNetworkMs{0.0, 60000.0, false, false, "a time in ms"};
+
+// A number in [lo, hi], or exactly 0 when zero_ok (program::number has no "0 or" form).
+CLI::Validator number_in(double lo, double hi, bool zero_ok = false) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) ||
+            !((v >= lo && v <= hi) || (zero_ok && v == 0.0)))
+          return fmt::format("{} is not {}a number in [{}, {}]", text, zero_ok ? "0 or " : "", lo, hi);
+        return {};
+      },
+      fmt::format("{}NUMBER in [{} - {}]", zero_ok ? "0 or " : "", lo, hi));
+}
+
+// The amplifier's output rates: its conversion rate over 2^UR, UR = 0..7 (docs/hil-model.md).
+int averaging_for(double rate_hz) {
+  const double adc = StrainGaugeParams{}.adc_rate_hz;
+  for (int n = 1; n <= 128; n *= 2)
+    if (std::fabs(adc / n - rate_hz) <= 1e-9 * adc) return n;
+  return 0;
+}
+
+// The scenario, its length and seed.
+void add_scenario_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--scenario", o.config.scenario,
+                 "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
+      ->transform(program::one_of(kScenarios))
+      ->default_str("wall-tap");
+  cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
+      ->check(program::number(kRunSeconds))
+      ->default_str("20");
+  cmd.add_option("--seed", o.config.seed, "random seed (operator, gauge noise, network)")
+      ->check(program::seed())
+      ->default_str("1");
+}
+
+// Each direction's deadband codec.
+void add_codec_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--mode", o.mode, "deadband or predictive, both directions")
+      ->transform(program::one_of(kModes))
+      ->default_str("deadband");
+  cmd.add_option("--mode-velocity", o.mode_velocity, "mode for HSI->TOP velocity (overrides --mode)")
+      ->transform(program::one_of(kModes));
+  cmd.add_option("--mode-force", o.mode_force, "mode for TOP->HSI force (overrides --mode)")
+      ->transform(program::one_of(kModes));
+  cmd.add_option("--p", o.p, "deadband p for both directions (0.1 = 10 %)")
+      ->check(program::number(program::kWeberFraction))
+      ->default_str("0.1");
+  cmd.add_option("--p-velocity", o.p_velocity, "p for HSI->TOP velocity (overrides --p)")
+      ->check(program::number(program::kWeberFraction));
+  cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
+      ->check(program::number(program::kWeberFraction));
+  cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
+                 "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
+                 "estimate (its smooth velocity estimate)")
+      ->transform(program::one_of(kMotionVelocities))
+      ->default_str("difference");
+  cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
+      ->check(program::number(kFloorVelocity))
+      ->default_str("0");
+  cmd.add_option("--floor-force", o.floor_force, "force deadband floor, N (0: the paper's rule)")
+      ->check(program::number(kFloorForce))
+      ->default_str("0");
+  cmd.add_option("--filter-hz", o.filter_hz, "prefilter cut-off for both directions (0: off)")
+      ->check(program::number(program::kCutoffAt1kHz))
+      ->default_str("0");
+  cmd.add_option("--filter-hz-velocity", o.filter_hz_velocity, "prefilter cut-off for velocity (overrides --filter-hz)")
+      ->check(program::number(program::kCutoffAt1kHz));
+  cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
+      ->check(program::number(program::kCutoffAt1kHz));
+}
+
+// The transport between the levers and the firmware's watchdog and rest repeat.
+void add_link_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--topology", o.config.topology,
+                 "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
+                 "over the network)")
+      ->transform(program::one_of(kTopologies))
+      ->default_str("two-sites");
+  cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
+      ->check(program::number(kNetworkMs))
+      ->default_str("0");
+  cmd.add_option("--jitter-ms", o.config.network.jitter_ms, "network jitter (uniform, added)")
+      ->check(program::number(kNetworkMs))
+      ->default_str("0");
+  cmd.add_option("--loss", o.config.network.loss, "datagram loss probability")
+      ->check(program::number({0.0, 1.0, false, false, "a probability"}))
+      ->default_str("0");
+  cmd.add_option("--comms-timeout-ms", o.comms_timeout_ms, "firmware watchdog timeout")
+      ->check(program::whole(1, 10000, "a whole number of milliseconds"))
+      ->default_str(std::to_string(fw::LeverConfig{}.comms_timeout));
+  cmd.add_option("--rest-repeat-ms", o.rest_repeat_ms,
+                 "a data frame that brings its stream to rest is sent again this much later (0: never)")
+      ->check(program::whole(0, 30000, "a whole number of milliseconds"))
+      ->default_str(std::to_string(fw::LeverConfig{}.rest_repeat));
+}
+
+// Time-domain passivity at both levers.
+void add_passivity_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--passivity", o.passivity,
+                 "time-domain passivity at both levers: off, observe (observer and energy frames only) or tdpa")
+      ->transform(program::one_of(kPassivity))
+      ->default_str("off");
+  cmd.add_option("--passivity-reserve-j", o.passivity_reserve_j,
+                 "of each port's own input energy, what it keeps for its own output (0: the literature's TDPA)")
+      ->check(program::number(kReserveJoules))
+      ->default_str(fmt::format("{}", fw::PassivityConfig{}.reserve_j));
+  cmd.add_option("--passivity-reserve-share", o.passivity_reserve_share,
+                 "of each joule a port takes in, the share that may go to its reserve (the rest goes to the peer at "
+                 "once; 1: the reserve fills first)")
+      ->check(program::number(kShare))
+      ->default_str(fmt::format("{}", fw::PassivityConfig{}.reserve_share));
+  cmd.add_option("--passivity-display-spend-s", o.passivity_display_spend_s,
+                 "the HSI's display spends its port's energy over this time constant (0: all at once, the "
+                 "literature's TDPA)")
+      ->check(program::number(kSpendSeconds))
+      ->default_str(fmt::format("{}", fw::PassivityConfig{}.display_spend_time_s));
+  cmd.add_option("--passivity-drift-gain", o.passivity_drift_gain,
+                 "under tdpa, the rate at which the TOP's reference is pulled toward the HSI's position, 1/s")
+      ->check(program::number(kDriftGain))
+      ->default_str(fmt::format("{}", fw::PassivityConfig{}.drift_gain_per_s));
+}
+
+// Homing and injected faults.
+void add_homing_and_fault_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_flag("--no-homing", o.no_homing,
+               "levers with absolute encoders at 0.1 rad, armed at once (default: incremental encoders at a "
+               "random angle, homed against the end stop before the scenario)");
+  cmd.add_option("--fault", o.faults,
+                 "inject a fault: KIND@START[+DURATION][:ARG], kinds link-down, burst-loss, delay-step (:MS), "
+                 "bus-off, encoder-glitch, gauge-stale, gauge-saturated, motor-fault, tick-late (the firmware not "
+                 "stepped for DURATION), reboot (the controller restarts; +DURATION of boot time) (:hsi|:top); "
+                 "repeatable");
+}
+
+// The TOP's force amplifier.
+void add_gauge_options(CLI::App& cmd, RunOptions& o) {
+  const StrainGaugeParams gauge;
+  cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
+                 "the force amplifier's IIR cut-off, Hz (Flintec DAD 141.1: 18, 8, 4, 3, 2, 1, 0.5, 0.25; 0: off)")
+      ->check(number_in(0.1, 100.0, true))
+      ->default_str(fmt::format("{}", gauge.filter_hz));
+  cmd.add_option("--gauge-rate-hz", o.gauge_rate_hz,
+                 "the force amplifier's output rate, readings per second (600 / 2^k, k = 0..7)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || averaging_for(v) == 0)
+              return text + " is not 600 / 2^k for k = 0..7 (600, 300, 150, 75, 37.5, 18.75, 9.375, 4.6875)";
+            return {};
+          },
+          "600 / 2^k"))
+      ->default_str(fmt::format("{}", gauge.output_rate_hz()));
+  cmd.add_option("--gauge-noise-n", o.config.gauge.noise_n, "the force amplifier's noise per conversion, N rms")
+      ->check(program::number({0.0, 1.0, false, false, "a noise in N rms"}))
+      ->default_str(fmt::format("{}", gauge.noise_n));
+  cmd.add_option("--gauge-step-n", o.config.gauge.step_n, "the force amplifier's display step, N")
+      ->check(program::number({1e-6, 1.0, false, false, "a step in N"}))
+      ->default_str(fmt::format("{}", gauge.step_n));
+}
+
+// What is printed and traced.
+void add_output_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_flag("--json", o.json, "print one JSON object");
+  cmd.add_option("--trace", o.trace, "write a per-tick CSV trace, atomically, as the run goes ('-': stdout)")
+      ->check(program::path());
+}
+
+}  // namespace
+
+void add_run_options(CLI::App& cmd, RunOptions& o) {
+  add_scenario_options(cmd, o);
+  add_codec_options(cmd, o);
+  add_link_options(cmd, o);
+  add_passivity_options(cmd, o);
+  add_homing_and_fault_options(cmd, o);
+  add_gauge_options(cmd, o);
+  add_output_options(cmd, o);
+}
+
+SimConfig run_config(const RunOptions& o) {
+  SimConfig c = o.config;
+  c.velocity_codec = {o.mode_velocity.value_or(o.mode), o.p_velocity.value_or(o.p), o.floor_velocity,
+                      o.filter_hz_velocity.value_or(o.filter_hz)};
+  c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
+                   o.filter_hz_force.value_or(o.filter_hz)};
+  c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
+  c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
+  c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);
+  c.top_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);
+  c.hsi_firmware.passivity.mode = o.passivity;
+  c.top_firmware.passivity.mode = o.passivity;
+  c.hsi_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.top_firmware.passivity.reserve_j = o.passivity_reserve_j;
+  c.hsi_firmware.passivity.reserve_share = o.passivity_reserve_share;
+  c.top_firmware.passivity.reserve_share = o.passivity_reserve_share;
+  c.hsi_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
+  c.top_firmware.passivity.display_spend_time_s = o.passivity_display_spend_s;
+  c.hsi_firmware.passivity.drift_gain_per_s = o.passivity_drift_gain;
+  c.top_firmware.passivity.drift_gain_per_s = o.passivity_drift_gain;
+  for (const auto& f : o.faults) {
+    c.faults.push_back(parse_fault_spec(f));
+    if (c.faults.back().start_s >= c.duration_s)
+      throw program::BadInput(fmt::format("fault '{}' starts at {} s, after the run's {} s (--duration)",
+                                          program::printable(f), program::short_number(c.faults.back().start_s),
+                                          program::short_number(c.duration_s)));
+  }
+  c.homing = !o.no_homing;
+  c.gauge.averaging = averaging_for(o.gauge_rate_hz);
+  const auto& n = c.network;
+  if (c.topology == Topology::one_site && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
+    throw std::invalid_argument(
+        "--delay-ms, --jitter-ms and --loss need --topology two-sites: one site has no network");
+
+  c.record_trace = !o.trace.empty();
+  return c;
+}
+
+}  // namespace lever::hil

@@ -1,0 +1,41 @@
+#pragma once
+// `lever-hil run`'s options: declared on the command line, then made into the simulation's configuration.
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lever/codec/config.hpp"
+#include "lever/fw/lever_config.hpp"
+#include "lever/hil/simulation.hpp"
+#include "lever/hil/strain_gauge_model.hpp"
+
+namespace lever::hil {
+
+struct RunOptions {
+  SimConfig config;
+  codec::Mode mode = codec::Mode::deadband;
+  std::optional<codec::Mode> mode_velocity, mode_force;
+  double p = 0.1;
+  std::optional<double> p_velocity, p_force;
+  double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
+  double comms_timeout_ms = static_cast<double>(fw::LeverConfig{}.comms_timeout);
+  double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);
+  bool no_homing = false;
+  fw::PassivityMode passivity = fw::PassivityMode::off;
+  double passivity_reserve_j = fw::PassivityConfig{}.reserve_j;
+  double passivity_reserve_share = fw::PassivityConfig{}.reserve_share;
+  double passivity_display_spend_s = fw::PassivityConfig{}.display_spend_time_s;
+  double passivity_drift_gain = fw::PassivityConfig{}.drift_gain_per_s;
+  std::optional<double> filter_hz_velocity, filter_hz_force;
+  std::vector<std::string> faults;
+  bool json = false;
+  std::string trace;
+  double gauge_rate_hz = StrainGaugeParams{}.output_rate_hz();
+};
+
+void add_run_options(CLI::App& cmd, RunOptions& o);
+// Throws program::BadInput or std::invalid_argument for options that do not go together.
+SimConfig run_config(const RunOptions& o);
+
+}  // namespace lever::hil
