@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# scripts/demo in its short mode: every figure of its two tables (Fig. 8 and Fig. 12 beside the paper) must be the
+# CSV's, found here by the column's name: the printed figure is the summary's mean, the summary's mean is the mean
+# of the runs in sweep.csv, and sweep.csv's run for seed 1 is what `lever-hil run` reports for the same point.
+# usage: demo_tables.sh SOURCE_DIR BUILD_DIR
+set -uo pipefail
+root=$1 build=$2
+source "$root/tests/cli/lib.sh"
+hil=$build/bin/lever-hil
+
+"$root/scripts/demo" --short --build "$build" --out "$work/demo" >"$work/out" 2>"$work/err"
+code=$?
+check "the demo exits 0 (got $code; $(tail -1 "$work/err"))" test "$code" -eq 0
+
+# column CSV NAME: NAME's column number in the CSV's header (empty if absent).
+column() { head -1 "$1" | tr -d '\r' | tr ',' '\n' | grep -nxF -- "$2" | cut -d: -f1; }
+# where CSV "NAME=VALUE;...": the key columns' numbers and values, "NUMBER=VALUE;...", for select below.
+where() {
+  local csv=$1 kv k spec=""
+  local -a keys
+  IFS=';' read -ra keys <<<"$2"
+  for kv in "${keys[@]}"; do
+    k=$(column "$csv" "${kv%%=*}")
+    [[ -n $k ]] || { echo "no column ${kv%%=*} in $csv" >&2; return 1; }
+    spec+="$k=${kv#*=};"
+  done
+  echo "$spec"
+}
+# cell CSV COLUMN_NAME "KEY=VALUE;...": the cell of the first row whose keys hold those values (numbers as numbers).
+cell() {
+  local csv=$1 name=$2 c spec
+  c=$(column "$csv" "$name")
+  [[ -n $c ]] || { echo "no column $name in $csv" >&2; return 1; }
+  spec=$(where "$csv" "$3") || return 1
+  awk -F, -v c="$c" -v spec="$spec" 'NR > 1 {
+      n = split(spec, s, ";"); ok = 1
+      for (i = 1; i < n; i++) { split(s[i], p, "="); v = $p[1]
+        if (v != p[2] && !(v ~ /^[-+.0-9eE]+$/ && (v - p[2]) ^ 2 < 1e-18)) ok = 0 }
+      if (ok) { print $c; found = 1; exit } }
+    END { exit !found }' "$csv"
+}
+# runs_mean CSV COLUMN_NAME "KEY=VALUE;...": the mean over the matching rows of sweep.csv, times 100.
+runs_mean() {
+  local csv=$1 name=$2 c spec
+  c=$(column "$csv" "$name")
+  [[ -n $c ]] || { echo "no column $name in $csv" >&2; return 1; }
+  spec=$(where "$csv" "$3") || return 1
+  awk -F, -v c="$c" -v spec="$spec" 'NR > 1 {
+      n = split(spec, s, ";"); ok = 1
+      for (i = 1; i < n; i++) { split(s[i], p, "="); v = $p[1]
+        if (v != p[2] && !(v ~ /^[-+.0-9eE]+$/ && (v - p[2]) ^ 2 < 1e-18)) ok = 0 }
+      if (ok) { sum += $c; count++ } }
+    END { if (!count) exit 1; printf "%.6f", 100 * sum / count }' "$csv"
+}
+one_decimal() { awk -v x="$1" 'BEGIN { printf "%.1f", x }'; }
+near() { awk -v a="$1" -v b="$2" -v d="$3" 'BEGIN { exit !((a - b) ^ 2 <= d ^ 2) }'; }
+
+# check_figure LABEL PRINTED SUMMARY SWEEP SUMMARY_COLUMN RUN_COLUMN SUMMARY_KEYS RUN_KEYS
+check_figure() {
+  local label=$1 printed=$2 summary=$3 sweep=$4 scol=$5 rcol=$6 skeys=$7 rkeys=$8 mean runs
+  mean=$(cell "$summary" "$scol" "$skeys")
+  check "$label: the summary has a row and a $scol column" test -n "$mean"
+  check "$label: printed $printed is the summary's $scol $mean" test "$printed" = "$(one_decimal "${mean:-nan}")"
+  runs=$(runs_mean "$sweep" "$rcol" "$rkeys")
+  check "$label: the summary's $scol $mean is the mean of sweep.csv's $rcol ($runs)" near "${mean:-0}" "${runs:-1e9}" 0.0051
+}
+
+# The Fig. 8 table: "  VARIANT p=P %[, ...]   VELOCITY %   FORCE %   OFF-JND %   [paper]".
+sweep_dir=$work/demo/sweep
+rows=0
+while read -r variant p v f j; do
+  rows=$((rows + 1))
+  pr=$(awk -v p="$p" 'BEGIN { print p / 100 }')
+  for m in "velocity $v velocity_rate_percent velocity_packet_rate" "force $f force_rate_percent force_packet_rate" \
+    "off-JND $j jnd_violation_percent force_jnd_violation"; do
+    read -r what printed scol rcol <<<"$m"
+    check_figure "Fig. 8, $variant p=$p %, $what" "$printed" "$sweep_dir/summary.csv" "$sweep_dir/sweep.csv" \
+      "$scol" "$rcol" "variant=$variant;p_percent=$p" "variant=$variant;p=$pr"
+  done
+done < <(sed -n "/beside the paper's Fig. 8/,/(off-JND:/p" "$work/out" |
+  sed -nE 's/^  ([a-z+]+) p=([0-9.]+) %[^0-9]* +([0-9.]+) % +([0-9.]+) % +([0-9.]+) %.*/\1 \2 \3 \4 \5/p')
+check "the Fig. 8 table has its 8 rows (found $rows)" test "$rows" -eq 8
+
+# The Fig. 12 table: "  DIRECTION, VARIANT[ (N Hz)], P %   HERE %   PAPER %".
+sphere_dir=$work/demo/sphere
+rows=0
+while IFS='|' read -r direction variant p here; do
+  rows=$((rows + 1))
+  pr=$(awk -v p="$p" 'BEGIN { print p / 100 }')
+  check_figure "Fig. 12, $direction, $variant, p=$p %" "$here" "$sphere_dir/summary.csv" "$sphere_dir/sweep.csv" \
+    "${direction}_rate_percent" "${direction}_packet_rate" "direction=$direction;variant=$variant;p_percent=$p" \
+    "direction=$direction;variant=$variant;p=$pr"
+done < <(sed -n "/beside the paper's Fig. 12/,/(what is reproduced/p" "$work/out" |
+  sed -nE 's/^  (velocity|force), (3-DoF|3-DoF[^,(]*[^ ,(])( \([0-9]+ Hz\))?, ([0-9.]+) % +([0-9.]+) %.*/\1|\2|\4|\5/p')
+check "the Fig. 12 table has its 6 rows (found $rows)" test "$rows" -eq 6
+
+# sweep.csv against lever-hil run at one point of each table, seed 1, the sweep's duration.
+duration=$(sed -nE 's/^sweep: [0-9]+ runs of ([0-9.]+) s .*/\1/p' "$work/out" | head -1)
+check "the demo's sweeps say their duration ($duration)" test -n "$duration"
+"$hil" run --scenario wall-tap --seed 1 --p 0.1 --duration "${duration:-1}" --json >"$work/run.json"
+for pair in "velocity_packet_rate velocity_packet_rate" "force_packet_rate force_packet_rate" \
+  "force_jnd_violation force_jnd_violation"; do
+  read -r rcol key <<<"$pair"
+  got=$(cell "$sweep_dir/sweep.csv" "$rcol" "variant=deadband;p=0.1;seed=1")
+  want=$(jq -r ".$key" "$work/run.json" | awk '{ printf "%.6f", $1 }')
+  check "sweep.csv's deadband p=0.1 seed 1 $rcol $got is lever-hil run's $want" test "$got" = "$want"
+done
+"$hil" run --scenario sphere-3dof --seed 1 --p-velocity 0.2 --p-force 0 --delay-ms 0.2 --jitter-ms 0.1 \
+  --duration "${duration:-1}" --json >"$work/sphere.json"
+for key in velocity_packet_rate force_packet_rate; do
+  got=$(cell "$sphere_dir/sweep.csv" "$key" "direction=velocity;variant=3-DoF;p=0.2;seed=1")
+  want=$(jq -r ".$key" "$work/sphere.json" | awk '{ printf "%.6f", $1 }')
+  check "sphere sweep.csv's velocity 3-DoF p=0.2 seed 1 $key $got is lever-hil run's $want" test "$got" = "$want"
+done
+
+report "demo tables"
