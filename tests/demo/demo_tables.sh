@@ -14,7 +14,7 @@ check "the demo exits 0 (got $code; $(tail -1 "$work/err"))" test "$code" -eq 0
 
 # column CSV NAME: NAME's column number in the CSV's header (empty if absent).
 column() { head -1 "$1" | tr -d '\r' | tr ',' '\n' | grep -nxF -- "$2" | cut -d: -f1; }
-# where CSV "NAME=VALUE;...": the key columns' numbers and values, "NUMBER=VALUE;...", for select below.
+# where CSV "NAME=VALUE;...": the key columns' numbers and values, "NUMBER=VALUE;...", for matching below.
 where() {
   local csv=$1 kv k spec=""
   local -a keys
@@ -26,8 +26,9 @@ where() {
   done
   echo "$spec"
 }
-# cell CSV COLUMN_NAME "KEY=VALUE;...": the cell of the first row whose keys hold those values (numbers as numbers).
-cell() {
+# matching CSV COLUMN_NAME "KEY=VALUE;...": the named column of every row whose keys hold those values (numbers
+# compared as numbers); fails if a name is not in the header or no row matches.
+matching() {
   local csv=$1 name=$2 c spec
   c=$(column "$csv" "$name")
   [[ -n $c ]] || { echo "no column $name in $csv" >&2; return 1; }
@@ -36,22 +37,12 @@ cell() {
       n = split(spec, s, ";"); ok = 1
       for (i = 1; i < n; i++) { split(s[i], p, "="); v = $p[1]
         if (v != p[2] && !(v ~ /^[-+.0-9eE]+$/ && (v - p[2]) ^ 2 < 1e-18)) ok = 0 }
-      if (ok) { print $c; found = 1; exit } }
+      if (ok) { print $c; found = 1 } }
     END { exit !found }' "$csv"
 }
-# runs_mean CSV COLUMN_NAME "KEY=VALUE;...": the mean over the matching rows of sweep.csv, times 100.
-runs_mean() {
-  local csv=$1 name=$2 c spec
-  c=$(column "$csv" "$name")
-  [[ -n $c ]] || { echo "no column $name in $csv" >&2; return 1; }
-  spec=$(where "$csv" "$3") || return 1
-  awk -F, -v c="$c" -v spec="$spec" 'NR > 1 {
-      n = split(spec, s, ";"); ok = 1
-      for (i = 1; i < n; i++) { split(s[i], p, "="); v = $p[1]
-        if (v != p[2] && !(v ~ /^[-+.0-9eE]+$/ && (v - p[2]) ^ 2 < 1e-18)) ok = 0 }
-      if (ok) { sum += $c; count++ } }
-    END { if (!count) exit 1; printf "%.6f", 100 * sum / count }' "$csv"
-}
+# cell CSV COLUMN_NAME KEYS: the first matching row's; runs_mean CSV COLUMN_NAME KEYS: the mean of all, times 100.
+cell() { matching "$@" | head -1; }
+runs_mean() { matching "$@" | awk '{ sum += $1 } END { if (!NR) exit 1; printf "%.6f", 100 * sum / NR }'; }
 one_decimal() { awk -v x="$1" 'BEGIN { printf "%.1f", x }'; }
 near() { awk -v a="$1" -v b="$2" -v d="$3" 'BEGIN { exit !((a - b) ^ 2 <= d ^ 2) }'; }
 
