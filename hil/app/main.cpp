@@ -19,6 +19,7 @@
 #include "run_options.hpp"
 #include "serve.hpp"
 #include "sphere.hpp"
+#include "sphere_sweep.hpp"
 #include "sweep.hpp"
 
 namespace {

@@ -1,12 +1,11 @@
 #pragma once
-// lever-hil's sphere-3dof scenario (the paper's 3-DoF experiment): run one, and sweep p for the Fig. 12-like
-// plots. Kept apart from the lever scenarios' run and sweep, which drive the firmware.
+// lever-hil run's sphere-3dof scenario (the paper's 3-DoF experiment): its configuration from run's options, its
+// report and trace. Kept apart from the lever scenarios' run, which drives the firmware; its sweep: sphere_sweep.hpp.
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
-#include "sweep.hpp"
 
 namespace lever::hil {
 
@@ -18,7 +17,5 @@ nlohmann::json sphere_report_json(const SphereConfig& config, const SphereResult
 
 // Prints the report (human or JSON) and writes the trace CSV when a path is given.
 int run_sphere_command(const SphereConfig& config, bool json, const std::string& trace_path);
-
-int run_sphere_sweep(const SweepOptions& options);
 
 }  // namespace lever::hil
