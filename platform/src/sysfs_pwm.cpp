@@ -7,6 +7,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstring>
+#include <optional>
 #include <thread>
 
 #include "sysfs_write.hpp"
@@ -20,6 +21,18 @@ Error os_error(int err, std::string message) { return Error{std::move(message) +
 bool exists(const std::string& path) { return ::access(path.c_str(), F_OK) == 0; }
 
 UniqueFd open_for_write(const std::string& path) { return UniqueFd(::open(path.c_str(), O_WRONLY | O_CLOEXEC)); }
+
+// The decimal an attribute holds (its first line: a test's regular file may keep the tail of a longer value).
+std::optional<std::uint64_t> read_decimal(int fd) {
+  char buffer[32];
+  const ssize_t got = ::pread(fd, buffer, sizeof buffer, 0);
+  if (got <= 0) return std::nullopt;
+  const char* const end = buffer + got;
+  std::uint64_t value = 0;
+  const auto [last, ec] = std::from_chars(buffer, end, value);
+  if (ec != std::errc{} || (last != end && *last != '\n')) return std::nullopt;
+  return value;
+}
 
 // The kernel makes pwmM/ during the export write, but udev may still be changing its attributes' owner and
 // mode for a while after; they are ready when they can be opened for writing.
@@ -69,7 +82,7 @@ Result<SysfsPwm> SysfsPwm::open(const PwmMotorConfig& config) {
 
   UniqueFd enable = open_for_write(dir + "/enable");
   UniqueFd duty = open_for_write(dir + "/duty_cycle");
-  UniqueFd period = open_for_write(dir + "/period");
+  UniqueFd period(::open((dir + "/period").c_str(), O_RDWR | O_CLOEXEC));
   UniqueFd polarity = open_for_write(dir + "/polarity");
   struct Opened {
     const char* attribute;
@@ -82,13 +95,19 @@ Result<SysfsPwm> SysfsPwm::open(const PwmMotorConfig& config) {
       return os_error(err, "motor PWM: cannot open " + dir + "/" + o.attribute);
     }
   }
-  // Disabled before anything else (a channel found exported may be running); duty before period, because a
-  // period shorter than the duty in force is refused; polarity last, as the kernel changes it only while
-  // the channel is disabled.
+  // The kernel's PWM core refuses every state with period 0, and a freshly exported channel has period 0 on
+  // many controllers: then the period goes first. Otherwise disabled before anything else (a channel found
+  // exported may be running), and duty 0 before the period, because a period shorter than the duty in force
+  // is refused. Polarity last: controllers change it only while disabled.
   const auto failed = [&](const char* attribute, const std::string& value) {
     const int err = errno;
     return os_error(err, "motor PWM: cannot write " + value + " to " + dir + "/" + attribute);
   };
+  const std::optional<std::uint64_t> period_in_force = read_decimal(period.get());
+  if (!period_in_force) return os_error(EIO, "motor PWM: cannot read a period from " + dir + "/period");
+  if (*period_in_force == 0 && !write_decimal(period.get(), config.period_ns)) {
+    return failed("period", std::to_string(config.period_ns));
+  }
   if (!write_decimal(enable.get(), 0)) return failed("enable", "0");
   if (!write_decimal(duty.get(), 0)) return failed("duty_cycle", "0");
   if (!write_decimal(period.get(), config.period_ns)) return failed("period", std::to_string(config.period_ns));
