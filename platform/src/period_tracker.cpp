@@ -25,6 +25,7 @@ fw::Tick PeriodTracker::woke(std::int64_t now_ns, LoopStats& stats) noexcept {
 void PeriodTracker::step_done(std::int64_t now_ns, LoopStats& stats) noexcept {
   const std::int64_t took_ns = now_ns - woke_ns_;
   ++stats.steps;
+  stats.step_duration.record_ns(took_ns);
   if (took_ns > period_ns_) ++stats.long_steps;
   if (took_ns > stats.worst_step_ns) stats.worst_step_ns = took_ns;
   ++next_;

@@ -130,6 +130,10 @@ TEST_CASE("PeriodTracker: each wake-up serves the latest tick due, skipping the 
   CHECK(stats.steps == 5);
   CHECK(stats.overruns() == 3);
   CHECK(stats.wake_latency.count() == 5);
+  // Step durations 30, 100, 1200, 100 and 10 µs.
+  CHECK(stats.step_duration.count() == 5);
+  CHECK(stats.step_duration.percentile_us(0.5) == 100);
+  CHECK(stats.step_duration.max_us() == 1200);
 }
 
 TEST_CASE("PeriodTracker: the ticks it serves show the core's step timing the gaps it must fault on", "[loop]") {

@@ -71,7 +71,7 @@ check "--sim exits 0" test "$code" -eq 0
 check "--sim prints a status line a second" test "$(wc -l <"$work/stats")" -ge 3
 check "status lines are JSON with the documented fields" \
   jq -e 'has("role") and has("state") and has("faults") and has("position_valid") and has("force_n") and
-         has("wakeup_latency_us") and has("encoder") and has("modbus") and .role == "top"' "$work/stats" >/dev/null
+         has("wakeup_latency_us") and has("step_us") and has("encoder") and has("modbus") and .role == "top"' "$work/stats" >/dev/null
 check "the simulated TOP homes and arms" jq -se 'map(.state) | index("armed") != null' "$work/stats" >/dev/null
 check "passivity is off by default and sends no energy frames" \
   jq -se 'all(.passivity.mode == "off" and .passivity.energy_sent == 0)' "$work/stats" >/dev/null

@@ -33,6 +33,7 @@ static_assert(fw::HasStepClock<BoardHal>);
 // What the printing thread shows of the loop itself, taken by the loop (its statistics are its own to read).
 struct LoopSample {
   double p50_us = 0, p99_us = 0, max_us = 0;
+  double step_p50_us = 0, step_p99_us = 0, step_max_us = 0;
   long minor_faults = 0;  // of the loop's thread since the loop started
 };
 
@@ -78,6 +79,9 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         b.wakeup_p50_us = l->p50_us;
         b.wakeup_p99_us = l->p99_us;
         b.wakeup_max_us = l->max_us;
+        b.step_p50_us = l->step_p50_us;
+        b.step_p99_us = l->step_p99_us;
+        b.step_max_us = l->step_max_us;
         b.minor_faults = static_cast<std::uint64_t>(l->minor_faults);
       }
       if (gauge) {
@@ -109,9 +113,12 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         if (now % 1000 == 0) {  // once a second: a histogram walk and one system call
           const long faults = thread_minor_faults();
           if (faults_at_start < 0) faults_at_start = faults;
+          const auto us = [](std::uint64_t v) { return static_cast<double>(v); };
           const auto& h = loop.stats().wake_latency;
-          loop_sample.publish({static_cast<double>(h.percentile_us(0.50)), static_cast<double>(h.percentile_us(0.99)),
-                               static_cast<double>(h.max_us()), faults - faults_at_start});
+          const auto& d = loop.stats().step_duration;
+          loop_sample.publish({us(h.percentile_us(0.50)), us(h.percentile_us(0.99)), us(h.max_us()),
+                               us(d.percentile_us(0.50)), us(d.percentile_us(0.99)), us(d.max_us()),
+                               faults - faults_at_start});
         }
       },
       stop.get_token());

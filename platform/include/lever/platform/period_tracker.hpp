@@ -14,7 +14,8 @@
 namespace lever::platform {
 
 struct LoopStats {
-  LatencyHistogram wake_latency;  // actual wake-up minus the time its tick was due
+  LatencyHistogram wake_latency;   // actual wake-up minus the time its tick was due
+  LatencyHistogram step_duration;  // wake-up to the step's end: the CPU a step takes, preemption included
   std::uint64_t steps = 0;
   std::uint64_t late_wakes = 0;       // wake-ups a whole period or more after their tick was due
   std::uint64_t skipped_periods = 0;  // ticks never served because of them

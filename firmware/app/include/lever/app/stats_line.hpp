@@ -40,6 +40,7 @@ struct Snapshot {
 // What only a board has (a simulated lever reports null for each).
 struct BoardStats {
   std::optional<double> wakeup_p50_us, wakeup_p99_us, wakeup_max_us;
+  std::optional<double> step_p50_us, step_p99_us, step_max_us;  // wake-up to the step's end
   std::optional<std::uint64_t> minor_faults;
   std::optional<std::uint64_t> modbus_polls, modbus_errors, modbus_timeouts, modbus_reconnects;
 };
