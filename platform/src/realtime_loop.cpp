@@ -188,7 +188,10 @@ bool RealtimeLoop::begin_run() noexcept {
   if (!owns_ || ::gettid() != thread_) return false;
   *stats_ = LoopStats{};
   steady_ = false;
-  tracker_ = PeriodTracker(monotonic_ns(), period_ns_);
+  // Deadlines on whole multiples of the period: loops on one machine keep the same phase however they were
+  // started, so a closed loop of several processes in virtual time (the kernel rig) repeats run after run.
+  const std::int64_t now = monotonic_ns();
+  tracker_ = PeriodTracker(now - now % period_ns_, period_ns_);
   return true;
 }
 

@@ -46,8 +46,8 @@ class RealtimeLoop {
   RealtimeLoop& operator=(const RealtimeLoop&) = delete;
   ~RealtimeLoop();
 
-  // Calls step(fw::Tick) once per period until `stop` is requested (checked before each sleep), tick 1 one
-  // period after the call. Per period the loop allocates nothing and calls clock_nanosleep and twice
+  // Calls step(fw::Tick) once per period until `stop` is requested (checked before each sleep), tick 1 at the
+  // first whole multiple of the period on CLOCK_MONOTONIC after the call. Per period the loop allocates nothing and calls clock_nanosleep and twice
   // clock_gettime (the vDSO's where the clocksource allows); getrusage once when the steady part starts and once
   // at the end. Statistics start afresh with each run. Returns false, running nothing, on a thread other than
   // open()'s.
