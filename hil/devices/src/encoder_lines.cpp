@@ -56,6 +56,7 @@ struct EncoderLines::Impl {
   std::atomic<std::uint64_t> max_backlog{0};
   std::atomic<std::uint64_t> index_pulses{0};
   std::atomic<std::uint64_t> write_errors{0};
+  std::atomic<std::int64_t> last_edge_ns{0};
 
   // The thread's own.
   bool z_asserted = false;
@@ -101,6 +102,7 @@ struct EncoderLines::Impl {
       return;
     }
     const std::int64_t now_at = from + direction;
+    last_edge_ns.store(static_cast<std::int64_t>(now_ns()), std::memory_order_relaxed);
     count.store(now_at, std::memory_order_release);
     edges.fetch_add(1, std::memory_order_relaxed);
     // After the A/B edge, so the reader (which merges its lines by kernel time) finds Z at this count.
@@ -214,9 +216,9 @@ void EncoderLines::set_count(std::int64_t target) noexcept {
 
 EncoderLinesStats EncoderLines::stats() const noexcept {
   const Impl& s = *impl_;
-  return {s.edges.load(std::memory_order_relaxed), s.count.load(std::memory_order_acquire),
-          s.max_backlog.load(std::memory_order_relaxed), s.index_pulses.load(std::memory_order_relaxed),
-          s.write_errors.load(std::memory_order_relaxed)};
+  return {s.edges.load(std::memory_order_relaxed),        s.count.load(std::memory_order_acquire),
+          s.max_backlog.load(std::memory_order_relaxed),  s.index_pulses.load(std::memory_order_relaxed),
+          s.write_errors.load(std::memory_order_relaxed), s.last_edge_ns.load(std::memory_order_relaxed)};
 }
 
 const std::string& EncoderLines::description() const noexcept { return impl_->description; }

@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <mutex>
 #include <optional>
@@ -89,6 +90,7 @@ struct GaugeServer::Impl {
   std::atomic<std::uint64_t> requests{0};
   std::atomic<std::uint64_t> replies{0};
   std::atomic<std::uint64_t> connections{0};
+  std::atomic<std::int64_t> last_reply_ns{0};
 
   // TCP
   UniqueFd listener;
@@ -116,6 +118,11 @@ struct GaugeServer::Impl {
     if (muted.load(std::memory_order_relaxed)) return;
     std::lock_guard lock(mapping_mutex);
     if (modbus_reply(context.get(), request, length, mapping.get()) > 0) {
+      // steady_clock is CLOCK_MONOTONIC on Linux: comparable with the kernel's time stamps.
+      last_reply_ns.store(
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+              .count(),
+          std::memory_order_relaxed);
       replies.fetch_add(1, std::memory_order_relaxed);
     }
   }
@@ -252,20 +259,22 @@ GaugeServer::GaugeServer(GaugeServer&&) noexcept = default;
 GaugeServer& GaugeServer::operator=(GaugeServer&&) noexcept = default;
 GaugeServer::~GaugeServer() = default;
 
-void GaugeServer::set_force(double newtons) noexcept {
+std::uint64_t GaugeServer::set_force(double newtons) noexcept {
   const RegisterWords encoded =
       encode_registers(raw_for_newtons(newtons, impl_->map), impl_->map.type, impl_->map.word_order);
   std::lock_guard lock(impl_->mapping_mutex);
   std::uint16_t* table = impl_->map.function == RegisterFunction::holding ? impl_->mapping->tab_registers
                                                                           : impl_->mapping->tab_input_registers;
   for (int i = 0; i < encoded.count; ++i) table[i] = encoded.words[static_cast<std::size_t>(i)];
+  // Replies are counted under the same lock: none in flight now.
+  return impl_->replies.load(std::memory_order_relaxed);
 }
 
 void GaugeServer::set_muted(bool muted) noexcept { impl_->muted.store(muted, std::memory_order_relaxed); }
 
 GaugeServerCounters GaugeServer::counters() const noexcept {
   return {impl_->requests.load(std::memory_order_relaxed), impl_->replies.load(std::memory_order_relaxed),
-          impl_->connections.load(std::memory_order_relaxed)};
+          impl_->connections.load(std::memory_order_relaxed), impl_->last_reply_ns.load(std::memory_order_relaxed)};
 }
 
 int GaugeServer::port() const noexcept { return impl_->port; }

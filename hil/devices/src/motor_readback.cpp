@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "fake_pwm_tree.hpp"
+#include "lever/hil/devices/pwm_controller_state.hpp"
 #include "lever/platform/unique_fd.hpp"
 #include "sim_line.hpp"
 
@@ -66,6 +67,7 @@ platform::Result<Line> open_line(const platform::MotorLineConfig& config, const 
 }  // namespace
 
 struct MotorReadback::Impl {
+  std::optional<PwmControllerState> controller;  // a kernel PWM controller of the rig's, instead of the tree
   UniqueFd enable;
   UniqueFd duty;
   UniqueFd period;
@@ -101,6 +103,43 @@ struct MotorReadback::Impl {
       ++read_errors;
     }
   }
+  // The tree of regular files lever-fw writes (make_fake_pwm_channel), its attributes opened; empty, or why not.
+  std::string open_tree(const platform::PwmMotorConfig& config) {
+    auto tree = make_fake_pwm_channel(config.sysfs_root, config.pwm_chip, config.pwm_channel);
+    if (!tree) return tree.error().message;
+    const std::string& dir = tree.value().channel_dir;
+    struct Attribute {
+      const char* name;
+      UniqueFd* fd;
+    };
+    for (const Attribute& a : {Attribute{"enable", &enable}, Attribute{"duty_cycle", &duty},
+                               Attribute{"period", &period}, Attribute{"polarity", &polarity}}) {
+      a.fd->reset(::open((dir + "/" + a.name).c_str(), O_RDONLY | O_CLOEXEC));
+      if (!*a.fd) return "motor readback: cannot open " + dir + "/" + a.name + ": " + std::strerror(errno);
+    }
+    return {};
+  }
+  void read_controller() noexcept {
+    if (const auto out = controller->read()) {
+      enable_value = out->enabled ? 1 : 0;
+      duty_ns = out->duty_ns;
+      period_ns = out->period_ns;
+      inversed = out->inversed;
+    } else {
+      ++read_errors;
+    }
+  }
+  void read_tree() noexcept {
+    take(read_unsigned(enable.get()), enable_value);
+    take(read_unsigned(duty.get()), duty_ns);
+    // The period and polarity are set when lever-fw opens the channel and never again while it runs: read
+    // every 100th call once the channel has a period, which saves a third of the reads in the world's 1 kHz
+    // loop. No period yet: read until there is one.
+    if (reads++ % 100 == 0 || period_ns == 0) {
+      take(read_unsigned(period.get()), period_ns);
+      take(read_inversed(polarity.get()), inversed);
+    }
+  }
   void take_line(const std::optional<Line>& line, bool& asserted) noexcept {
     if (!line) return;
     const std::optional<bool> level = line->sim.level();
@@ -118,25 +157,16 @@ platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConf
     for (std::size_t i = 0; i < problems.size(); ++i) message += (i == 0 ? "" : "; ") + problems[i];
     return Error{message, EINVAL};
   }
-  auto tree = make_fake_pwm_channel(config.sysfs_root, config.pwm_chip, config.pwm_channel);
-  if (!tree) return tree.error();
-
   auto impl = std::make_unique<Impl>();
-  const std::string& dir = tree.value().channel_dir;
-  struct Attribute {
-    const char* name;
-    UniqueFd* fd;
-  };
-  for (const Attribute& a : {Attribute{"enable", &impl->enable}, Attribute{"duty_cycle", &impl->duty},
-                             Attribute{"period", &impl->period}, Attribute{"polarity", &impl->polarity}}) {
-    a.fd->reset(::open((dir + "/" + a.name).c_str(), O_RDONLY | O_CLOEXEC));
-    if (!*a.fd) {
-      const int err = errno;
-      return Error{"motor readback: cannot open " + dir + "/" + a.name + ": " + std::strerror(err), err};
-    }
-  }
   impl->description = "pwmchip" + std::to_string(config.pwm_chip) + "/pwm" + std::to_string(config.pwm_channel) +
                       " under " + config.sysfs_root;
+  if (auto controller = PwmControllerState::find(config.sysfs_root, config.pwm_chip, config.pwm_channel)) {
+    if (!*controller) return controller->error();
+    impl->controller.emplace(std::move(*controller).value());
+    impl->description += " (the controller's output, " + impl->controller->path() + ")";
+  } else if (auto opened = impl->open_tree(config); !opened.empty()) {
+    return Error{opened, EINVAL};
+  }
 
   struct LineField {
     const char* field;
@@ -171,14 +201,10 @@ MotorReadback::~MotorReadback() = default;
 
 MotorReading MotorReadback::read() noexcept {
   Impl& s = *impl_;
-  s.take(read_unsigned(s.enable.get()), s.enable_value);
-  s.take(read_unsigned(s.duty.get()), s.duty_ns);
-  // The period and polarity are set when lever-fw opens the channel and never again while it runs: read
-  // every 100th call once the channel has a period, which saves a third of the reads in the world's 1 kHz loop
-  // (it shares an emulated guest's CPUs with two lever-fw processes). No period yet: read until there is one.
-  if (s.reads++ % 100 == 0 || s.period_ns == 0) {
-    s.take(read_unsigned(s.period.get()), s.period_ns);
-    s.take(read_inversed(s.polarity.get()), s.inversed);
+  if (s.controller) {
+    s.read_controller();
+  } else {
+    s.read_tree();
   }
   s.take_line(s.enable_line, s.enable_line_asserted);
   s.take_line(s.direction_line, s.direction_asserted);

@@ -31,6 +31,7 @@ struct EncoderLinesStats {
   std::uint64_t max_backlog = 0;   // the largest |target - count| seen by set_count()
   std::uint64_t index_pulses = 0;  // Z assertions
   std::uint64_t write_errors = 0;  // pull writes that failed (retried 1 ms later)
+  std::int64_t last_edge_ns = 0;   // CLOCK_MONOTONIC when the newest edge was written (0: none yet)
 };
 
 class EncoderLines {

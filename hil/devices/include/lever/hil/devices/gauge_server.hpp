@@ -17,9 +17,10 @@
 namespace lever::hil::devices {
 
 struct GaugeServerCounters {
-  std::uint64_t requests = 0;     // complete requests received (for us: RTU requests to other slaves are not)
-  std::uint64_t replies = 0;      // answers sent: registers or Modbus exceptions
-  std::uint64_t connections = 0;  // TCP connections accepted; 0 on RTU
+  std::uint64_t requests = 0;      // complete requests received (for us: RTU requests to other slaves are not)
+  std::uint64_t replies = 0;       // answers sent: registers or Modbus exceptions
+  std::uint64_t connections = 0;   // TCP connections accepted; 0 on RTU
+  std::int64_t last_reply_ns = 0;  // CLOCK_MONOTONIC when the newest answer was sent (0: none yet)
 };
 
 class GaugeServer {
@@ -39,8 +40,9 @@ class GaugeServer {
   ~GaugeServer();
 
   // The register value for this force: raw = (newtons - offset) / scale, encoded by encode_registers()
-  // (register_encode.hpp). From any thread; the next reply carries it.
-  void set_force(double newtons) noexcept;
+  // (register_encode.hpp). From any thread; the next reply carries it. Returns the answers sent before it was in
+  // the registers: every later one carries it (or a newer value).
+  std::uint64_t set_force(double newtons) noexcept;
   // Muted: requests are read and counted but never answered, as an amplifier that hangs. The client times
   // out (and, doing what platform::ModbusGauge does, reconnects).
   void set_muted(bool muted) noexcept;
