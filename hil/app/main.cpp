@@ -12,6 +12,7 @@
 
 #include "cli_choices.hpp"
 #include "delay_sweep.hpp"
+#include "latency_probe.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/parse.hpp"
@@ -112,6 +113,9 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
       ->default_str("20000");
   serve->add_flag("--hands-off", o.hands_off,
                   "the operator never takes the handle: the levers rest where their firmware puts them");
+  serve->add_flag("--latency-probe", o.latency_probe,
+                  "hands off; measure the pair's end-to-end latency with stimuli on the HSI's encoder and the TOP's "
+                  "gauge (needs the kernel rig's PWM controllers: docs/hil-serve.md)");
   serve->add_flag("--json", o.json, "print the report as one JSON object");
   serve->add_option("--trace", o.trace, "write a per-tick CSV trace (lever-hil run's columns; '-': stdout)")
       ->check(program::path());
@@ -146,7 +150,11 @@ int serve_command(const ServeOptions& o) {
     throw std::invalid_argument("serve plays the levers' world; sphere-3dof has no levers (use run)");
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
-  return run_serve(o, g_stop);
+  if (!o.latency_probe) return run_serve(o, g_stop);
+  ServeOptions hands_off = o;
+  hands_off.hands_off = true;
+  LatencyProbe probe;
+  return run_serve(hands_off, g_stop, &probe);
 }
 
 int sweep_command(const SweepOptions& o, const SweepCommand& cmd) {

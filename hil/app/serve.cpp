@@ -87,6 +87,7 @@ PairHeard ServeLoop::hear() const {
 bool ServeLoop::await_arming(const PairHeard& heard) {
   if (heard.both_armed) {
     scenario_start_ = tick_;
+    world_.reseed_noise(o_.seed);
     homed_at_s_ = std::chrono::duration<double>(Clock::now() - pacer_.start()).count();
     if (!o_.hands_off) world_.start_operator(tick_);
     fmt::print(stderr, "lever-hil serve: both levers armed after {:.1f} s; {}\n", homed_at_s_,
@@ -164,12 +165,13 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop, ServeProbe* 
     fmt::print(stderr, "lever-hil serve: cannot watch the CAN bus: {}\n", watch.error().message);
     return program::kRuntimeFailure;
   }
+  if (probe && !probe->attach(pair->hsi, pair->top, *hsi, *top)) return program::kRuntimeFailure;
   print_powered_up(world, *pair);
 
   ServeLoop loop(o, sim, world, *hsi, *top, watch.value(), trace ? &*trace : nullptr, probe);
   if (!loop.run(stop)) return program::kRuntimeFailure;
   if (trace) trace->commit();
-  print_serve_report(o, loop.finish(sim), loop.metrics(), trace && trace->is_stdout() ? stderr : stdout);
+  print_serve_report(o, loop.finish(sim), loop.metrics(), probe, trace && trace->is_stdout() ? stderr : stdout);
   return 0;
 }
 

@@ -19,9 +19,10 @@ struct ServeOptions {
   double arm_timeout_s = 300.0;  // wall seconds to wait for the pair to be armed
   std::uint64_t seed = 1;        // power-up angles, operator, gauge noise
   double max_edge_rate_hz = 20000.0;
-  bool hands_off = false;  // the operator never takes the handle: the levers go where their firmware puts them
-  bool json = false;       // the report as one JSON object on stdout
-  std::string trace;       // a per-tick CSV with lever-hil run's columns, written as the run goes
+  bool hands_off = false;      // the operator never takes the handle: the levers go where their firmware puts them
+  bool latency_probe = false;  // hands off, stimuli on the sensors, the pair's latency in the report
+  bool json = false;           // the report as one JSON object on stdout
+  std::string trace;           // a per-tick CSV with lever-hil run's columns, written as the run goes
 };
 
 // Exit code: 0 done (duration or signal), 1 runtime failure (a device that cannot be opened, the pair never

@@ -84,13 +84,19 @@ TraceRow serve_trace_row(double t, const World& world, const BusWatch& watch, co
 }
 
 void print_serve_report(const ServeOptions& o, const ServeSummary& summary, const ServeMetrics& metrics,
-                        std::FILE* out) {
+                        const ServeProbe* probe, std::FILE* out) {
   if (o.json) {
     auto report = report_json(summary.sim, summary.result);
     report["serve"] = serve_json(summary, metrics);
+    if (probe) probe->report(report);
     fmt::print(out, "{}\n", report.dump());
   } else {
     print_human(out, o, summary, metrics);
+    if (probe) {
+      nlohmann::json measured;
+      probe->report(measured);
+      fmt::print(out, "  probe: {}\n", measured.dump());
+    }
   }
 }
 

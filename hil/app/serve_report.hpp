@@ -36,6 +36,6 @@ struct ServeSummary {
 };
 
 void print_serve_report(const ServeOptions& o, const ServeSummary& summary, const ServeMetrics& metrics,
-                        std::FILE* out);
+                        const ServeProbe* probe, std::FILE* out);
 
 }  // namespace lever::hil

@@ -31,29 +31,37 @@ ServeTick ServeWorld::step(fw::Tick tick, bool hand_on, LeverDevices& hsi, Lever
   if (probe) probe->motors_read(tick, hsi_motor, top_motor);
   ServeTick s{command(hsi_motor), command(top_motor)};
   world_.advance(s.hsi_command, s.top_command);
-  const std::int64_t hsi_count = hsi.count_at(world_.hsi().angle());
+  const std::int64_t hsi_count = hsi.count_at(world_.hsi().angle()) + (probe ? probe->hsi_count_offset() : 0);
   const std::int64_t top_count = top.count_at(world_.top().angle());
   hsi.encoder->set_count(hsi_count);
   top.encoder->set_count(top_count);
   if (probe) probe->encoders_set(tick, hsi_count, top_count);
-  sense(s, tick, hsi, top);
+  sense(s, tick, hsi, top, probe);
   world_.update_operator(tick, s.hand);
   return s;
 }
 
 // The gauges' amplifier (noise, filter, output rate, display step), then the register layout the lever's config
 // names.
-void ServeWorld::sense(ServeTick& s, fw::Tick tick, LeverDevices& hsi, LeverDevices& top) {
+void ServeWorld::sense(ServeTick& s, fw::Tick tick, LeverDevices& hsi, LeverDevices& top, ServeProbe* probe) {
   s.contact = world_.contact_force();
   s.hand = world_.hand_force();
   top_gauge_.update(s.contact, tick);
   if (const auto r = top_gauge_.latest()) measured_ = r->raw * step_n_;
-  if (top.gauge) top.gauge->set_force(measured_);
+  if (top.gauge) {
+    const auto replies_before = top.gauge->set_force(measured_ + (probe ? probe->top_force_offset_n() : 0.0));
+    if (probe) probe->top_gauge_set(tick, replies_before);
+  }
   if (hsi.gauge) {
     hsi_gauge_.update(s.hand, tick);
     if (const auto r = hsi_gauge_.latest()) hsi.gauge->set_force(r->raw * step_n_);
   }
   s.measured = measured_;
+}
+
+void ServeWorld::reseed_noise(std::uint64_t seed) {
+  top_gauge_.reseed(seed * 4 + 4);
+  hsi_gauge_.reseed(seed * 4 + 3);
 }
 
 }  // namespace lever::hil

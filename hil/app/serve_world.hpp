@@ -26,12 +26,15 @@ class ServeWorld {
   double top_angle() const { return world_.top().angle(); }
   const World& world() const { return world_; }
   void start_operator(fw::Tick tick) { world_.start_operator(tick); }
+  // The gauges' noise from here on is the seed's, however many ticks came before (homing and arming take as
+  // long as the levers' programs and their commands take).
+  void reseed_noise(std::uint64_t seed);
 
   // One millisecond under the motors as the levers' programs now drive them.
   ServeTick step(fw::Tick tick, bool hand_on, LeverDevices& hsi, LeverDevices& top, ServeProbe* probe);
 
  private:
-  void sense(ServeTick& s, fw::Tick tick, LeverDevices& hsi, LeverDevices& top);
+  void sense(ServeTick& s, fw::Tick tick, LeverDevices& hsi, LeverDevices& top, ServeProbe* probe);
 
   double step_n_;
   World world_;

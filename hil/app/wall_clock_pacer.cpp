@@ -17,7 +17,7 @@ void WallClockPacer::wait() {
   max_lag_ms_ = std::max<std::int64_t>(max_lag_ms_, lag);
   if (lag > kMaxCatchUpMs) {
     ++slips_;
-    grid_start_ = now;
+    grid_start_ = whole_ms(now);
     grid_tick_ = 0;
   }
 }

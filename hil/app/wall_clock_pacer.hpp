@@ -12,7 +12,9 @@ class WallClockPacer {
   using Clock = std::chrono::steady_clock;
   static constexpr std::int64_t kMaxCatchUpMs = 50;
 
-  WallClockPacer() : start_(Clock::now()), grid_start_(start_) {}
+  // Ticks on whole milliseconds of the clock, where lever-fw's loops have theirs (platform's RealtimeLoop): the
+  // world and the levers keep one phase however they were started.
+  WallClockPacer() : start_(Clock::now()), grid_start_(whole_ms(start_)) {}
 
   // Until the next tick is due.
   void wait();
@@ -22,6 +24,8 @@ class WallClockPacer {
   std::int64_t max_lag_ms() const { return max_lag_ms_; }
 
  private:
+  static Clock::time_point whole_ms(Clock::time_point t) { return std::chrono::floor<std::chrono::milliseconds>(t); }
+
   Clock::time_point start_, grid_start_;
   std::int64_t grid_tick_ = 0;  // ticks since grid_start_
   std::uint64_t slips_ = 0;

@@ -55,6 +55,9 @@ class StrainGaugeModel {
     }
   }
 
+  // The noise from here on is this seed's, whatever was drawn before.
+  void reseed(std::uint64_t seed) noexcept { rng_ = Rng(seed); }
+
   // Called once per firmware tick with the true force; converts every sample the amplifier's clock has due
   // since the last call, and publishes a reading each time `averaging` conversions are in.
   void update(double true_force, fw::Tick now) {
