@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs inside the kernel rig with gpio-sim (run-in-guest --gpio-sim): one site, as lever_one_site.sh, and the TOP's
+# Runs inside the kernel rig in virtual time (run-in-guest --gpio-sim --pwm-sim --virtual-time): one site, as lever_one_site.sh, and the TOP's
 # lever-fw is killed with SIGKILL mid-run. The HSI must reach its safe state within its comms timeout. The TOP,
 # started again, comes up disarmed and not homed, homes, and the pair works again after a re-arm.
 # usage: lever_restart.sh BIN_DIR
@@ -28,7 +28,7 @@ check "SIGKILL of the TOP: the HSI faults on its silence" \
 require "and is safe: zero torque" wait_for 10 hsi '.torque_nm == 0'
 # A killed process cannot stop its motor: the PWM keeps its last duty until something else does (on a board,
 # the service's ExecStopPost). Shown, not asserted: it is the hardware's state, not lever-fw's doing.
-echo "the killed TOP's PWM (enable duty_cycle): $(pwm_state top)"
+echo "the killed TOP's PWM (enable duty_cycle): $(pwm_state top); its controller: $(pwm_hw top)"
 
 lines_before=$(wc -l <"$out/top.stats")
 start_fw top

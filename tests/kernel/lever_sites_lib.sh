@@ -1,32 +1,26 @@
 # Sourced by the kernel-rig tests that run real lever-fw processes behind `lever-hil serve` (run-in-guest
-# --gpio-sim), after lib.sh and gpio_sim_lib.sh. Each lever gets a gpio-sim chip named after its role with the
-# lines its config names by default (ENC_A, ENC_B, MOTOR_EN, MOTOR_DIR, MOTOR_FAULT), a PWM tree of the HIL's
-# under $pwm/<role>-sys, and a config file $work/<role>.toml.
+# --gpio-sim --pwm-sim --virtual-time), after lib.sh and gpio_sim_lib.sh. Each lever gets a gpio-sim chip named
+# after its role with the lines its config names by default (ENC_A, ENC_B, MOTOR_EN, MOTOR_DIR, MOTOR_FAULT), a
+# PWM channel of the kernel's PWM core (the rig's simulated controllers: the HSI's pwmchip0, the TOP's
+# pwmchip1), and a config file $work/<role>.toml.
 #
-# What the configs change from the example configs, and why. None of it is about the firmware; all of it is
-# about an emulated guest (TCG) on a shared two-core machine, where we measured the lever-fw loop's wake-up
-# latency at p50 0.3 ms but stalls of up to 190 ms while the host was busy with other work:
-# - encoder.counts_per_rev = 2048 (a 512-line encoder) and serve --max-edge-rate 2500: each simulated edge is
-#   a sysfs write in the guest, which manages a few thousand a second (at 4096 counts and 5000/s the lines ran
-#   538 edges behind), and the kernel keeps 16 events per line (GPIO v1), so lever-fw loses edges when it is
-#   held up longer than 32 edges take.
-# - board.encoder.edge_latency_us = 1000 (the most the backend takes: an edge waits at most a tick): the guest's
-#   interrupt thread delivers an edge's event up to milliseconds
-#   after its time stamp; with the board's 50 us, A/B events arrive out of order and count as lost.
-# - board.realtime.priority = 0: a SCHED_FIFO loop would starve the gauge's poll thread on the levers' vCPU.
-# - board.gauge.poll_us = 20000: each poll costs the guest about a millisecond of CPU; 50 a second leave room.
-# - link.comms_timeout_ms, timing.fault_after_ms, gauge.stale_ms = 500 and board.gauge.timeout_us = 200000:
-#   a stall of the guest must not look like a dead peer, a late loop, a dead amplifier. The tests still cut
-#   links and kill processes, and the levers must then reach their safe states within these.
-# Two vCPUs (run-in-guest --smp 2): lever-fw's on vCPU 0, serve and the encoder lines' interrupt threads on
-# vCPU 1. There each simulated edge's event reaches its line's FIFO before the next edge is written (the
-# interrupt thread, SCHED_FIFO, preempts the writer on its own vCPU), so the A/B order lever-fw reads is the
-# order written. Measured on one vCPU for all: 90 % busy, the world fell behind 267 times by over 50 ms in a
-# 15 s run, and the TOP's position loop went into a limit cycle on a plant answering that late. Unpinned on two,
-# an interrupt thread could wait milliseconds for the other vCPU under TCG: edges out of order, counted lost.
-# The PWM trees on tmpfs: lever-fw writes its duty every millisecond and serve reads it back, and /tmp in the
-# guest is an overlay on the host's files over 9p, where each of those would be a round trip to the host.
-pwm=$(mktemp -d -p /dev/shm)
+# The guest runs in virtual time (one vCPU, 1 ns an instruction): every timer fires on time in guest time, so
+# the levers run the example configurations as a board would. A config is the example file with only the keys
+# that name where this guest's devices are (the CAN interface, the gpio-sim chip, the TOP's PWM chip) changed;
+# write_config prints them. Everything a closed loop touches (the PWM trees, the status lines,
+# candump's log, serve's report and trace) lives in the guest (tmpfs, sysfs) while the run is on: the results share is
+# 9p to the host, whose I/O is not synchronised with virtual time. collect_results copies it all out at the end.
+#
+# Repeatability: the guest's own timers are deterministic in virtual time, but every program started (a poll's
+# jq, a sleep, cansend) is read from the host over 9p, and lands when the host answers. The steps before a
+# scenario (starting the programs, homing and arming on cansend commands) therefore start at virtual times that
+# differ from run to run. What keeps that from reaching the scenario: lever-fw's loops and serve's ticks fall on
+# whole milliseconds of CLOCK_MONOTONIC (one phase however they were started), serve re-seeds the world's noise
+# when the scenario starts, and the tests wait for the scenario's end with `wait`, starting no program while it
+# runs. What still differs is said in docs/hil-serve.md ("Repeatability").
+results=$out
+out=$(mktemp -d -p /dev/shm)
+examples=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../firmware/config" && pwd)
 dbc=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/common/protocol/lever.dbc
 dbc_decode=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/tools/dbc-decode
 pids=()
@@ -34,29 +28,79 @@ pids=()
 lever_chip() {  # lever_chip ROLE: its gpio-sim chip
   sim_chip "$1" ENC_A ENC_B MOTOR_EN MOTOR_DIR MOTOR_FAULT >/dev/null
 }
-
-# write_config ROLE CAN_INTERFACE GAUGE_TOML_LINES...: $work/ROLE.toml
-write_config() {
-  local role=$1 can=$2; shift 2
-  {
-    printf '[lever]\nrole = "%s"\n[encoder]\ncounts_per_rev = 2048.0\n[timing]\nfault_after_ms = 500\n' "$role"
-    printf '[link]\ncomms_timeout_ms = 500\n[gauge]\nstale_ms = 500\n'
-    printf '[board.can]\ninterface = "%s"\n[board.encoder]\nchip = "%s"\nedge_latency_us = 1000\n' "$can" "$role"
-    printf '[board.motor]\nsysfs_root = "%s"\nline_chip = "%s"\n' "$pwm/$role-sys" "$role"
-    printf '[board.realtime]\npriority = 0\n'
-    printf '[board.gauge]\ntimeout_us = 200000\npoll_us = 20000\n'
-    (($# > 0)) && printf '%s\n' "$@"
-  } >"$work/$role.toml"
+pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, none exported yet
+  local role dir
+  for role in hsi top; do
+    dir=/sys/class/pwm/pwmchip$(pwm_chip $role)
+    [[ $(basename "$(readlink -f "$dir/device")") == lever-pwm-sim.$(pwm_chip $role) && ! -e $dir/pwm0 ]] ||
+      { echo "FAILED: $dir is not a fresh lever-pwm-sim chip (run-in-guest --pwm-sim?)" >&2; return 1; }
+  done
 }
 
-# one_site NAME SERVE_ARGS...: both levers on vcan0 (the TOP's gauge on Modbus TCP), candump logging vcan0 to
-# $out/NAME.candump, serve started, then both lever-fw
+# set_key FILE SECTION KEY VALUE: the key's value in that [SECTION] of a TOML file (the key must be there)
+set_key() {
+  local file=$1 section=$2 key=$3 value=$4
+  awk -v section="[$2]" -v key="$3" -v value="$4" '
+    /^\[/ { in_section = ($1 == section) }
+    in_section && $1 == key && $2 == "=" { print key " = " value; found = 1; next }
+    { print }
+    END { exit !found }' "$file" >"$file.new" || { echo "FAILED: $file has no $key in [$section]" >&2; return 1; }
+  mv "$file.new" "$file"
+}
+
+# write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: $work/ROLE.toml, the example config with the devices
+# of this guest and the given keys changed; prints every key that differs from the example
+write_config() {
+  local role=$1 can=$2 file=$work/$1.toml; shift 2
+  cp "$examples/$role.toml" "$file"
+  set_key "$file" board.can interface "\"$can\"" &&
+    set_key "$file" board.encoder chip "\"$role\"" &&
+    set_key "$file" board.motor line_chip "\"$role\"" || exit 1
+  [[ $role == top ]] && { set_key "$file" board.motor pwm_chip "$(pwm_chip top)" || exit 1; }
+  while (($# >= 3)); do set_key "$file" "$1" "$2" "$3" || exit 1; shift 3; done
+  echo "$role.toml differs from the example in:"
+  diff "$examples/$role.toml" "$file" | sed -n 's/^> /  /p'
+}
+
+# one_site NAME SERVE_ARGS...: both levers on one bus (the TOP's gauge on Modbus TCP), candump logging the HSI's
+# interface to $out/NAME.candump, serve started, then both lever-fw. The bus is vcan0 for both, or with
+# site_bus=kvaser the emulated SJA1000 controllers of run-in-guest --kvaser, on one emulated bus: the HSI on can0,
+# the TOP on can1.
+site_bus=vcan
 one_site() {
   local name=$1; shift
-  lever_chip hsi && lever_chip top || exit 1
-  write_config hsi vcan0
-  write_config top vcan0 'transport = "tcp"' 'host = "127.0.0.1"' 'port = 1502'
-  candump -r 8388608 -L vcan0 >"$out/$name.candump" &
+  lever_chip hsi && lever_chip top && pwm_chips || exit 1
+  write_config hsi "$(site_can hsi)"
+  write_config top "$(site_can top)"
+  candump -r 8388608 -L "$(site_can hsi)" >"$out/$name.candump" &
+  pids+=("$!")
+  start_serve "$name" "$@" || exit 1
+  start_fw hsi
+  start_fw top
+}
+
+# site_can ROLE: the lever's CAN interface at one site
+site_can() {
+  if [[ $site_bus == kvaser ]]; then [[ $1 == hsi ]] && echo can0 || echo can1; else echo vcan0; fi
+}
+
+# two_sites NAME SERVE_ARGS...: the HSI on vcan0, the TOP on vcan1 (its gauge on Modbus RTU over a pty), joined by
+# two lever-bridges over UDP on loopback; candump logging vcan0 to $out/NAME-hsi.candump; serve started, then both
+# lever-fw. Extra config keys for both levers in $two_sites_keys (SECTION KEY VALUE...).
+two_sites_keys=()
+two_sites() {
+  local name=$1; shift
+  lever_chip hsi && lever_chip top && pwm_chips || exit 1
+  write_config hsi vcan0 "${two_sites_keys[@]}"
+  write_config top vcan1 board.gauge transport '"rtu"' board.gauge device "\"$work/top-gauge.tty\"" \
+    "${two_sites_keys[@]}"
+  "$bin/lever-bridge" --can vcan0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key" --site-id 1 \
+    --stats-json >"$out/bridge-hsi.stats" 2>"$out/bridge-hsi.err" &
+  pids+=("$!")
+  "$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5001 --peer 127.0.0.1:5000 --key "$key" --site-id 2 \
+    --stats-json >"$out/bridge-top.stats" 2>"$out/bridge-top.err" &
+  pids+=("$!")
+  candump -r 8388608 -L vcan0 >"$out/$name-hsi.candump" &
   pids+=("$!")
   start_serve "$name" "$@" || exit 1
   start_fw hsi
@@ -66,7 +110,7 @@ one_site() {
 # start_serve NAME ARGS...: lever-hil serve in the background, waiting until its devices are up
 start_serve() {
   local name=$1; shift
-  taskset -c 1 "$bin/lever-hil" serve --hsi-config "$work/hsi.toml" --top-config "$work/top.toml" --max-edge-rate 2500 "$@" \
+  "$bin/lever-hil" serve --hsi-config "$work/hsi.toml" --top-config "$work/top.toml" "$@" \
     >"$out/$name.report" 2>"$out/$name.serve" &
   serve_pid=$!
   pids+=("$serve_pid")
@@ -82,15 +126,10 @@ start_serve() {
 
 # start_fw ROLE: lever-fw with its status lines in $out/ROLE.stats (appended: a restarted lever goes on)
 start_fw() {
-  local before=$(irq_threads | wc -l) i
-  taskset -c 0 "$bin/lever-fw" --config "$work/$1.toml" --stats-json >>"$out/$1.stats" 2>>"$out/$1.err" &
+  "$bin/lever-fw" --config "$work/$1.toml" --stats-json >>"$out/$1.stats" 2>>"$out/$1.err" &
   eval "${1}_pid=$!"
   pids+=("$!")
-  # Its encoder lines' interrupt threads appear when it requests the lines: onto the world's vCPU with them.
-  for ((i = 0; i < 100; i++)); do (($(irq_threads | wc -l) >= before + 2)) && break; sleep 0.1; done
-  for i in $(irq_threads); do taskset -p 2 "$i" >/dev/null; done
 }
-irq_threads() { pgrep '^irq/.*-lever-fw'; }
 
 # wait_for_serve NAME TEXT: until serve's log says it (120 s)
 wait_for_serve() {
@@ -130,13 +169,27 @@ wait_for() {
 # command CAN OPCODE: a command frame to both levers of pair 0 (opcodes: 1 arm, 3 rearm, 6 home), by cansend
 command() { cansend "$1" "080#0$2""03000000000000"; }
 
-# A lever's motor as lever-fw left it in the PWM tree: "enable duty_cycle".
-pwm_state() { echo "$(head -n 1 "$pwm/$1-sys/class/pwm/pwmchip0/pwm0/enable") $(head -n 1 "$pwm/$1-sys/class/pwm/pwmchip0/pwm0/duty_cycle")"; }
+# pwm_chip ROLE: the number of the lever's PWM chip
+pwm_chip() { [[ $1 == hsi ]] && echo 0 || echo 1; }
+# pwm_state ROLE: the lever's PWM channel as the kernel's PWM core holds it, "enable duty_cycle"
+pwm_state() {
+  local dir=/sys/class/pwm/pwmchip$(pwm_chip "$1")/pwm0
+  echo "$(cat "$dir/enable") $(cat "$dir/duty_cycle")"
+}
+# pwm_hw ROLE: what the simulated controller was last programmed with, "enabled period duty polarity applies"
+pwm_hw() { cat "/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state"; }
 
 stop_all() {
   local p
   for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
   wait 2>/dev/null
+  collect_results
+}
+
+# collect_results: the run's files from the guest's tmpfs to the results share (once)
+collect_results() {
+  [[ $out == "$results" ]] && return 0
+  cp -a "$out/." "$results/" && out=$results
 }
 
 # require NAME COMMAND...: check, and on failure stop the test here (the steps after it depend on it), with

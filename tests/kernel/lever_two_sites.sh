@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs inside the kernel rig with gpio-sim (run-in-guest --gpio-sim): two sites. The HSI's lever-fw on vcan0, the
+# Runs inside the kernel rig in virtual time (run-in-guest --gpio-sim --pwm-sim --virtual-time): two sites. The HSI's lever-fw on vcan0, the
 # TOP's on vcan1 (its strain gauge on Modbus RTU over a pseudo-terminal), joined by two lever-bridges over UDP
 # on loopback, where the kernel's netem delays every datagram by 20 ms and loses 2 %. Both run the time-domain
 # passivity controller (control.passivity.mode = "tdpa"; issue 14), so its energy frames cross the link too. lever-hil serve plays
@@ -12,23 +12,10 @@ set -uo pipefail
 . "$(dirname "$0")/lever_sites_lib.sh"
 trap stop_all EXIT
 
-lever_chip hsi && lever_chip top || exit 1
-write_config hsi vcan0 '[control.passivity]' 'mode = "tdpa"'
-write_config top vcan1 'transport = "rtu"' "device = \"$work/top-gauge.tty\"" 'baud = 115200' \
-  '[control.passivity]' 'mode = "tdpa"'
 # Loopback carries only the bridges' datagrams here (the gauge is on the pty), so netem on lo is the link.
 check "netem: 20 ms one-way delay, 2 % loss on the link" tc qdisc add dev lo root netem delay 20ms loss 2%
-"$bin/lever-bridge" --can vcan0 --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key" --site-id 1 \
-  --stats-json >"$out/bridge-hsi.stats" 2>"$out/bridge-hsi.err" &
-pids+=("$!")
-"$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5001 --peer 127.0.0.1:5000 --key "$key" --site-id 2 \
-  --stats-json >"$out/bridge-top.stats" 2>"$out/bridge-top.err" &
-pids+=("$!")
-candump -r 8388608 -L vcan0 >"$out/two-sites-hsi.candump" &
-pids+=("$!")
-start_serve two-sites --duration 0 --hands-off --json --trace "$out/two-sites.trace.csv" || exit 1
-start_fw hsi
-start_fw top
+two_sites_keys=(control.passivity mode '"tdpa"')
+two_sites two-sites --duration 0 --hands-off --json --trace "$out/two-sites.trace.csv"
 
 require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
 require "(TOP too)" wait_for 60 top '.state == "disarmed"'
