@@ -47,7 +47,7 @@ bool LatencyProbe::attach(const app::FwConfig& hsi, const app::FwConfig& top, co
   }
   hsi_ = &hsi_devices;
   top_ = &top_devices;
-  force_offset_n_ = options_.force_bias_n - options_.force_step_n;
+  force_n_ = options_.force_base_n;
   return true;
 }
 
@@ -58,6 +58,7 @@ void LatencyProbe::top_gauge_set(fw::Tick, std::uint64_t replies_before) {
 
 void LatencyProbe::tick_done(fw::Tick, bool scenario) {
   if (!scenario) return;
+  holding_ = true;
   const std::int64_t now = now_ns();
   if (next_probe_ns_ == 0) next_probe_ns_ = now + options_.interval_ms * kNsPerMs;
   const auto out = answering().read();
@@ -74,18 +75,19 @@ void LatencyProbe::tick_done(fw::Tick, bool scenario) {
       return;
     case Phase::fired:
       if (!stimulus_out()) {
-        if (now - fired_ns_ > options_.timeout_ms * kNsPerMs) finish(now, std::nullopt);
+        if (now - fired_ns_ > options_.timeout_ms * kNsPerMs) finish(now, Outcome::missed);
         return;
       }
       phase_ = Phase::stimulus_out;
       [[fallthrough]];
     case Phase::stimulus_out:
       if (stimulus_ns_ == 0) {
-        finish(now, std::nullopt);  // when the stimulus left is not known
+        finish(now, Outcome::unresolved);  // when the stimulus left is not known
       } else if (out->applies > applies_before_) {
-        finish(now, answer_after_stimulus());
+        const auto latency = answer_after_stimulus();
+        finish(now, latency ? Outcome::measured : Outcome::unresolved, latency.value_or(0.0));
       } else if (now - fired_ns_ > options_.timeout_ms * kNsPerMs) {
-        finish(now, std::nullopt);
+        finish(now, Outcome::missed);
       }
       return;
   }
@@ -100,8 +102,8 @@ void LatencyProbe::fire(std::int64_t now_ns, std::uint64_t applies) {
     count_offset_ = count_offset_ == 0 ? 1 : 0;
   } else {
     replies_before_.reset();
-    force_high_ = !force_high_;
-    force_offset_n_ = options_.force_bias_n + (force_high_ ? 1.0 : -1.0) * options_.force_step_n;
+    stepped_ = !stepped_;
+    force_n_ = options_.force_base_n + (stepped_ ? options_.force_step_n : 0.0);
   }
 }
 
@@ -132,11 +134,17 @@ std::optional<double> LatencyProbe::answer_after_stimulus() const {
   return std::nullopt;
 }
 
-void LatencyProbe::finish(std::int64_t now_ns, std::optional<double> latency_ms) {
-  if (latency_ms) {
-    series().latencies_ms.push_back(*latency_ms);
-  } else {
-    ++series().missed;
+void LatencyProbe::finish(std::int64_t now_ns, Outcome outcome, double latency_ms) {
+  switch (outcome) {
+    case Outcome::measured:
+      series().latencies_ms.push_back(latency_ms);
+      break;
+    case Outcome::missed:
+      ++series().missed;
+      break;
+    case Outcome::unresolved:
+      ++series().unresolved;
+      break;
   }
   phase_ = Phase::waiting;
   kind_ = kind_ == Kind::motion ? Kind::force : Kind::motion;
@@ -145,7 +153,8 @@ void LatencyProbe::finish(std::int64_t now_ns, std::optional<double> latency_ms)
 
 void LatencyProbe::report(nlohmann::json& report) const {
   const auto summary = [](const Series& s) {
-    nlohmann::json j{{"n", s.latencies_ms.size()}, {"missed", s.missed}, {"postponed", s.postponed}};
+    nlohmann::json j{
+        {"n", s.latencies_ms.size()}, {"missed", s.missed}, {"unresolved", s.unresolved}, {"postponed", s.postponed}};
     if (s.latencies_ms.empty()) {
       j["p50"] = j["p99"] = j["max"] = nullptr;
     } else {

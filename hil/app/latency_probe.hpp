@@ -4,13 +4,14 @@
 //
 // - Motion: the HSI's encoder lines are moved by one edge (added to what the world drives); the time from that
 //   edge's write to the first state the TOP's PWM controller is programmed with after it.
-// - Force: the TOP's gauge reading is stepped by force_step_n (added to the world's); the time from the first
-//   Modbus reply carrying it to the first state the HSI's PWM controller is programmed with after it.
+// - Force: the TOP's gauge reads force_base_n, then steps by force_step_n and back (in place of the world's
+//   amplifier, whose noise would change the answer on its own); the time from the first Modbus reply carrying a
+//   step to the first state the HSI's PWM controller is programmed with after it.
 //
-// A probe fires only when the lever that must answer has been quiet (no new PWM state) for quiet_ms, so that the
-// first new state is the answer and not the lever's own motion. The force steps ride on a bias that presses the
-// HSI (hands off) against its end stop, where it cannot move and so stays quiet between steps. Needs the kernel
-// rig's PWM controllers (lever-pwm-sim), which time-stamp every state they are given.
+// Once both levers are armed the world holds them still, as a bench measurement clamps them, so that the
+// stimuli are the only changes they see; a probe fires only when the lever that must answer has been quiet (no
+// new PWM state) for quiet_ms, so the first new state after the stimulus is its answer. Needs the kernel rig's PWM
+// controllers (lever-pwm-sim), which time-stamp every state they are given.
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -24,8 +25,8 @@ struct LatencyProbeOptions {
   std::int64_t interval_ms = 100;  // between probes, alternating motion and force
   std::int64_t quiet_ms = 20;      // the answering lever's PWM unchanged this long before a probe
   std::int64_t timeout_ms = 100;   // no answer within this: counted as missed
-  double force_bias_n = 1.5;       // presses the HSI against its end stop (hands off)
-  double force_step_n = 0.5;       // the force probe: bias +- step; above the force codec's floor and p
+  double force_base_n = 1.0;       // the TOP's gauge reads this, or this plus the step
+  double force_step_n = 0.5;       // above the force codec's floor and its p of the base
 };
 
 class LatencyProbe : public ServeProbe {
@@ -34,12 +35,13 @@ class LatencyProbe : public ServeProbe {
 
   bool attach(const app::FwConfig& hsi, const app::FwConfig& top, const LeverDevices& hsi_devices,
               const LeverDevices& top_devices) override;
+  bool holds_levers() const override { return holding_; }
   std::int64_t hsi_count_offset() const override { return count_offset_; }
-  double top_force_offset_n() const override { return force_offset_n_; }
+  std::optional<double> top_force_n() const override { return force_n_; }
   void top_gauge_set(fw::Tick, std::uint64_t replies_before) override;
   void tick_done(fw::Tick, bool scenario) override;
   // "latency": {"encoder_edge_to_top_pwm_ms": {...}, "gauge_reply_to_hsi_pwm_ms": {...}}, each with n, missed,
-  // postponed, p50, p99, max (null when none was measured).
+  // unresolved, postponed, p50, p99, max (null when none was measured).
   void report(nlohmann::json& report) const override;
 
  private:
@@ -47,7 +49,8 @@ class LatencyProbe : public ServeProbe {
   enum class Phase { waiting, fired, stimulus_out };
   struct Series {
     std::vector<double> latencies_ms;
-    std::uint64_t missed = 0;
+    std::uint64_t missed = 0;      // no answer within timeout_ms
+    std::uint64_t unresolved = 0;  // an answer, but when the stimulus left or which state answered is not known
     std::uint64_t postponed = 0;
   };
 
@@ -57,14 +60,15 @@ class LatencyProbe : public ServeProbe {
   void fire(std::int64_t now_ns, std::uint64_t applies);
   bool stimulus_out();
   std::optional<double> answer_after_stimulus() const;
-  void finish(std::int64_t now_ns, std::optional<double> latency_ms);
+  enum class Outcome { measured, missed, unresolved };
+  void finish(std::int64_t now_ns, Outcome outcome, double latency_ms = 0.0);
 
   LatencyProbeOptions options_;
   std::optional<devices::PwmControllerState> hsi_pwm_, top_pwm_;
   const LeverDevices* hsi_ = nullptr;
   const LeverDevices* top_ = nullptr;
   std::int64_t count_offset_ = 0;
-  double force_offset_n_ = 0.0;
+  std::optional<double> force_n_;  // from attach()
   Kind kind_ = Kind::motion;
   Phase phase_ = Phase::waiting;
   std::int64_t next_probe_ns_ = 0;
@@ -73,7 +77,8 @@ class LatencyProbe : public ServeProbe {
   std::uint64_t edges_before_ = 0;               // the HSI's encoder edges when the motion probe fired
   std::optional<std::uint64_t> replies_before_;  // the TOP's gauge answers before the force step was in it
   std::uint64_t applies_before_ = 0;             // the answering controller's states when the probe fired
-  bool force_high_ = false;
+  bool holding_ = false;                         // from the first tick of the scenario
+  bool stepped_ = false;                         // the force probe's step is on
   Series motion_, force_;
 };
 

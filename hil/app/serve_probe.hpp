@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "lever/app/fw_config.hpp"
 #include "lever/fw/hal.hpp"
@@ -24,9 +25,12 @@ class ServeProbe {
                       const LeverDevices& /*top*/) {
     return true;
   }
-  // Added to what the world drives: the HSI's encoder count, the TOP's gauge force.
+  // True: the world holds both levers still (as clamped on a bench) instead of moving them under their motors.
+  virtual bool holds_levers() const { return false; }
+  // Added to the count the world drives the HSI's encoder to.
   virtual std::int64_t hsi_count_offset() const { return 0; }
-  virtual double top_force_offset_n() const { return 0.0; }
+  // When set, what the TOP's gauge reads instead of the world's amplifier (a signal generator on its input).
+  virtual std::optional<double> top_force_n() const { return std::nullopt; }
 
   // The motors were just read back (the duty and lines each lever-fw wrote), before the world moves under them.
   virtual void motors_read(fw::Tick, const devices::MotorReading& /*hsi*/, const devices::MotorReading& /*top*/) {}

@@ -30,7 +30,7 @@ ServeTick ServeWorld::step(fw::Tick tick, bool hand_on, LeverDevices& hsi, Lever
   const auto top_motor = top.motor->read();
   if (probe) probe->motors_read(tick, hsi_motor, top_motor);
   ServeTick s{command(hsi_motor), command(top_motor)};
-  world_.advance(s.hsi_command, s.top_command);
+  if (!probe || !probe->holds_levers()) world_.advance(s.hsi_command, s.top_command);
   const std::int64_t hsi_count = hsi.count_at(world_.hsi().angle()) + (probe ? probe->hsi_count_offset() : 0);
   const std::int64_t top_count = top.count_at(world_.top().angle());
   hsi.encoder->set_count(hsi_count);
@@ -49,7 +49,8 @@ void ServeWorld::sense(ServeTick& s, fw::Tick tick, LeverDevices& hsi, LeverDevi
   top_gauge_.update(s.contact, tick);
   if (const auto r = top_gauge_.latest()) measured_ = r->raw * step_n_;
   if (top.gauge) {
-    const auto replies_before = top.gauge->set_force(measured_ + (probe ? probe->top_force_offset_n() : 0.0));
+    const auto generated = probe ? probe->top_force_n() : std::nullopt;
+    const auto replies_before = top.gauge->set_force(generated.value_or(measured_));
     if (probe) probe->top_gauge_set(tick, replies_before);
   }
   if (hsi.gauge) {
