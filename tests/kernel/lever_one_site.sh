@@ -71,7 +71,7 @@ check "no encoder edge lost" test "$(last_stat hsi .encoder.lost)/$(last_stat to
 # The motors went through the kernel's PWM core to the (simulated) controllers, as the configs say; the torques
 # serve read back above are these controllers' outputs.
 for role in hsi top; do
-  read -r hw_enabled hw_period hw_duty hw_polarity hw_applies <<<"$(pwm_hw $role)"
+  read -r hw_enabled hw_period hw_duty hw_polarity hw_applies hw_last_ns <<<"$(pwm_hw $role)"
   check "$role: its PWM controller was programmed through the kernel's PWM core: $hw_applies states, the last one $(pwm_hw $role)" \
     test "$hw_period $hw_polarity" = "50000 normal" -a "$hw_applies" -gt 100
 done

@@ -176,7 +176,8 @@ pwm_state() {
   local dir=/sys/class/pwm/pwmchip$(pwm_chip "$1")/pwm0
   echo "$(cat "$dir/enable") $(cat "$dir/duty_cycle")"
 }
-# pwm_hw ROLE: what the simulated controller was last programmed with, "enabled period duty polarity applies"
+# pwm_hw ROLE: what the simulated controller was last programmed with, "enabled period duty polarity applies
+# last_apply_ns"
 pwm_hw() { cat "/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state"; }
 
 stop_all() {
