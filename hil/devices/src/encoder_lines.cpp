@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "lever/fw/hal.hpp"
+#include "lever/platform/config_error.hpp"
 #include "sim_line.hpp"
 
 namespace lever::hil::devices {
@@ -141,11 +142,8 @@ namespace {
 
 platform::Result<EncoderLines> EncoderLines::open(const platform::GpioEncoderConfig& config,
                                                   EncoderLinesOptions options) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "encoder lines: ";
-    for (std::size_t i = 0; i < problems.size(); ++i) message += (i == 0 ? "" : "; ") + problems[i];
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty())
+    return platform::config_error("encoder lines", problems);
   if (!(options.max_edge_rate_hz > 0) || !std::isfinite(options.max_edge_rate_hz)) {
     return Error{
         "encoder lines: max_edge_rate_hz: " + std::to_string(options.max_edge_rate_hz) + ", must be above 0 and finite",
