@@ -134,9 +134,9 @@ TEST_CASE("every fault kind brings the levers to their safe behaviour, in time, 
 
 // Half the datagrams lost for 3 s. With the default 100 ms timeout, 100 ms without a frame from the peer trips
 // COMMS, which happens or not by the draw, early or late in the burst: how much data is lost while the levers
-// still stream, and so how many gaps they count, is the draw's (133 on x86-64; 10 under arm64's libm and ASan once
-// the rest repeat shifted the draws, against a bound of more than 10). So the counting is judged where the levers
-// ride the burst out (the timeout raised past it), and the safety where they may not.
+// still stream, and so how many gaps they count, is the draw's (it differs between libms; docs/firmware.md). So the
+// counting is judged where the levers ride the burst out (the timeout raised past it), and the safety where they
+// may not.
 TEST_CASE("burst loss is healed by the refresh and counted, not a crash of the loop", "[hil][faults]") {
   SECTION("the levers ride it out, and count the frames they lose") {
     SimConfig c = base();
@@ -230,7 +230,7 @@ TEST_CASE("late ticks: counted as overruns, TIMING exactly past the 5 ms bound, 
       } else {
         CHECK_FALSE(side.fault_at_s.has_value());
       }
-      CHECK(worst_velocity < 10.0);  // a hand on a desk-top lever; the Euler loop reached 37 rad/s from 1
+      CHECK(worst_velocity < 10.0);  // a hand on a desk-top lever (docs/firmware.md, "Timing bounds")
     }
   }
 }
@@ -351,9 +351,8 @@ TEST_CASE(
 
 // Over a link slower than the host's re-arm, a re-armed lever still receives its peer's heartbeats from before the
 // peer's own re-arm: "armed", then "fault". Taken as a peer that armed with it and left, they threw the pair out
-// again at every re-arm: from this one motor fault, 20 trips of the HSI and 21 of the TOP in 8 s, and up to 53
-// in the delayed wall-tap runs. The arming handshake (a peer counts once its heartbeat echoes this lever's
-// current arming) leaves the one fault and its one re-arm.
+// again at every re-arm (docs/can-protocol.md). The arming handshake (a peer counts once its heartbeat echoes this
+// lever's current arming) leaves the one fault and its one re-arm.
 TEST_CASE("over a 100 ms link, one fault is one trip: the re-armed pair is not thrown out by old heartbeats",
           "[hil][faults]") {
   SimConfig c = base();
