@@ -14,10 +14,44 @@
 using namespace lever;
 using namespace lever::hil;
 
-TEST_CASE("change detection: the wall-tap table stays within its spread over seeds", "[hil][change-detection]") {
-  std::ifstream in(LEVER_CHANGE_DETECTION_WALL_TAP);
+namespace {
+
+constexpr int kSeeds = 3;
+
+struct Means {
+  double velocity = 0, force = 0, jnd = 0, contact = 0;
+};
+
+// The mean of seeds 1-3 of one row's figures; Config is SimConfig or SphereConfig, run its run_simulation or
+// run_sphere.
+template <typename Config, typename Run>
+Means mean_over_seeds(Config c, Run run) {
+  Means m;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    c.seed = static_cast<std::uint64_t>(seed);
+    const auto r = run(c);
+    m.velocity += r.velocity_packet_rate / kSeeds;
+    m.force += r.force_packet_rate / kSeeds;
+    m.jnd += r.force_jnd_violation / kSeeds;
+    m.contact += r.contact_share / kSeeds;
+  }
+  return m;
+}
+
+nlohmann::json read_bounds(const char* path) {
+  std::ifstream in(path);
   REQUIRE(in.good());
-  const auto bounds = nlohmann::json::parse(in);
+  return nlohmann::json::parse(in);
+}
+
+bool within(const nlohmann::json& bounds, double v) {
+  return bounds.at("min").get<double>() <= v && v <= bounds.at("max").get<double>();
+}
+
+}  // namespace
+
+TEST_CASE("change detection: the wall-tap table stays within its spread over seeds", "[hil][change-detection]") {
+  const auto bounds = read_bounds(LEVER_CHANGE_DETECTION_WALL_TAP);
   REQUIRE(bounds.at("rows").size() == 6u);
   for (const auto& row : bounds.at("rows")) {
     const std::string name = row.at("name").get<std::string>() + " " + row.at("options").get<std::string>();
@@ -29,31 +63,18 @@ TEST_CASE("change detection: the wall-tap table stays within its spread over see
       const double p = row.at("p");
       c.velocity_codec = {mode, p, row.at("floor_velocity").get<double>(), row.at("filter_hz_velocity").get<double>()};
       c.force_codec = {mode, p, row.at("floor_force").get<double>(), row.at("filter_hz_force").get<double>()};
-      double velocity = 0, force = 0, jnd = 0;
-      constexpr int kSeeds = 3;
-      for (int seed = 1; seed <= kSeeds; ++seed) {
-        c.seed = static_cast<std::uint64_t>(seed);
-        const auto r = run_simulation(c);
-        velocity += r.velocity_packet_rate / kSeeds;
-        force += r.force_packet_rate / kSeeds;
-        jnd += r.force_jnd_violation / kSeeds;
-      }
-      auto within = [](const nlohmann::json& b, double v) {
-        return b.at("min").get<double>() <= v && v <= b.at("max").get<double>();
-      };
-      INFO(name << ": velocity " << velocity << " force " << force << " jnd " << jnd);
-      CHECK(within(row.at("velocity"), velocity));
-      CHECK(within(row.at("force"), force));
-      CHECK(within(row.at("jnd"), jnd));
+      const auto m = mean_over_seeds(c, [](const SimConfig& x) { return run_simulation(x); });
+      INFO(name << ": velocity " << m.velocity << " force " << m.force << " jnd " << m.jnd);
+      CHECK(within(row.at("velocity"), m.velocity));
+      CHECK(within(row.at("force"), m.force));
+      CHECK(within(row.at("jnd"), m.jnd));
     }
   }
 }
 
 TEST_CASE("change detection: the sphere-3dof table stays within its spread over seeds",
           "[hil][sphere][change-detection]") {
-  std::ifstream in(LEVER_CHANGE_DETECTION_SPHERE_3DOF);
-  REQUIRE(in.good());
-  const auto bounds = nlohmann::json::parse(in);
+  const auto bounds = read_bounds(LEVER_CHANGE_DETECTION_SPHERE_3DOF);
   REQUIRE(bounds.at("rows").size() == 8u);
   auto codec_of = [](const nlohmann::json& j) {
     return codec::Config<double>{j.at("mode") == "predictive" ? codec::Mode::predictive : codec::Mode::deadband,
@@ -66,24 +87,12 @@ TEST_CASE("change detection: the sphere-3dof table stays within its spread over 
       c.duration_s = bounds.at("duration_s").get<double>();
       c.velocity_codec = codec_of(row.at("velocity_codec"));
       c.force_codec = codec_of(row.at("force_codec"));
-      double velocity = 0, force = 0, jnd = 0, contact = 0;
-      constexpr int kSeeds = 3;
-      for (int seed = 1; seed <= kSeeds; ++seed) {
-        c.seed = static_cast<std::uint64_t>(seed);
-        const auto r = run_sphere(c);
-        velocity += r.velocity_packet_rate / kSeeds;
-        force += r.force_packet_rate / kSeeds;
-        jnd += r.force_jnd_violation / kSeeds;
-        contact += r.contact_share / kSeeds;
-      }
-      auto within = [](const nlohmann::json& b, double v) {
-        return b.at("min").get<double>() <= v && v <= b.at("max").get<double>();
-      };
-      INFO(name << ": velocity " << velocity << " force " << force << " jnd " << jnd << " contact " << contact);
-      CHECK(within(row.at("velocity"), velocity));
-      CHECK(within(row.at("force"), force));
-      CHECK(within(row.at("jnd"), jnd));
-      CHECK(within(row.at("contact"), contact));
+      const auto m = mean_over_seeds(c, [](const SphereConfig& x) { return run_sphere(x); });
+      INFO(name << ": velocity " << m.velocity << " force " << m.force << " jnd " << m.jnd << " contact " << m.contact);
+      CHECK(within(row.at("velocity"), m.velocity));
+      CHECK(within(row.at("force"), m.force));
+      CHECK(within(row.at("jnd"), m.jnd));
+      CHECK(within(row.at("contact"), m.contact));
     }
   }
 }
