@@ -4,22 +4,15 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <ctime>
 #include <utility>
 
+#include "lever/platform/config_error.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::platform {
 
-namespace {
-
-std::uint64_t monotonic_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
-}
-
-}  // namespace
+namespace {}  // namespace
 
 std::array<CanFilter, 5> lever_pair_filters(std::uint8_t pair) noexcept {
   // The flags in the mask must match the id's (zero): an extended or remote frame with the same 11 low bits
@@ -34,12 +27,7 @@ std::array<CanFilter, 5> lever_pair_filters(std::uint8_t pair) noexcept {
 }
 
 Result<BoardCanPort> BoardCanPort::open(const BoardCanPortConfig& config) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "CAN port config:";
-    for (const auto& p : problems) message += " " + p + ";";
-    message.pop_back();
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty()) return config_error("CAN port config", problems);
   const auto filters = lever_pair_filters(config.pair);
   SocketCanConfig socket_config;
   socket_config.interface = config.interface;
@@ -60,7 +48,7 @@ BoardCanPort::BoardCanPort(SocketCan socket, const BoardCanPortConfig& config) n
   const LinkState now = socket_.link_state();
   if (now != LinkState::up) {
     link_ = now;
-    next_check_ns_ = monotonic_ns() + retry_ns_;
+    next_check_ns_ = static_cast<std::uint64_t>(monotonic_ns()) + retry_ns_;
   }
 }
 
@@ -75,7 +63,7 @@ void BoardCanPort::lost(LinkState state) noexcept {
   if (link_ == LinkState::up) {
     ++stats_.link_losses;
     retry_ns_ = retry_first_ns_;
-    next_check_ns_ = monotonic_ns() + retry_ns_;
+    next_check_ns_ = static_cast<std::uint64_t>(monotonic_ns()) + retry_ns_;
   }
   // Down may turn into gone (removed while down); gone stays gone until a new socket is bound.
   if (link_ != LinkState::gone) link_ = state;
@@ -89,7 +77,7 @@ void BoardCanPort::regained() noexcept {
 }
 
 bool BoardCanPort::check_link() noexcept {
-  const std::uint64_t now = monotonic_ns();
+  const std::uint64_t now = static_cast<std::uint64_t>(monotonic_ns());
   if (now < next_check_ns_) return false;
   const LinkState state = socket_.recover();
   if (state == LinkState::up) {

@@ -12,6 +12,8 @@
 #include <utility>
 
 #include "gpio_chip.hpp"
+#include "lever/platform/config_error.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 
 namespace lever::platform {
 
@@ -20,12 +22,6 @@ namespace {
 // The v1 interface's per-line event FIFO (gpiolib-cdev.c: DECLARE_KFIFO(events, struct gpioevent_data, 16)).
 // A read asking for this many that gets them all has found the FIFO full.
 constexpr unsigned kKernelFifo = 16;
-
-std::uint64_t monotonic_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
-}
 
 std::uint64_t to_ns(const timespec& ts) noexcept {
   return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
@@ -65,7 +61,7 @@ std::uint64_t GpioEncoder::Impl::read_events() noexcept {
         complete = std::min(complete, tracker.newest_staged_ns(line));
         break;
       }
-      const std::uint64_t before = monotonic_ns();
+      const std::uint64_t before = static_cast<std::uint64_t>(monotonic_ns());
       const int n = gpiod_line_event_read_fd_multiple(fds[i], buffer.data(), kKernelFifo);
       if (n < 0) {
         if (errno != EAGAIN && errno != EWOULDBLOCK) tracker.note_read_error();
@@ -87,10 +83,10 @@ std::uint64_t GpioEncoder::Impl::read_events() noexcept {
 }
 
 void GpioEncoder::Impl::start_level_check() noexcept {
-  const std::uint64_t lo = monotonic_ns();
+  const std::uint64_t lo = static_cast<std::uint64_t>(monotonic_ns());
   const int a = gpiod_line_get_value(lines[0]);
   const int b = gpiod_line_get_value(lines[1]);
-  const std::uint64_t hi = monotonic_ns();
+  const std::uint64_t hi = static_cast<std::uint64_t>(monotonic_ns());
   if (a < 0 || b < 0) {
     tracker.note_read_error();
     return;
@@ -104,12 +100,7 @@ GpioEncoder& GpioEncoder::operator=(GpioEncoder&&) noexcept = default;
 GpioEncoder::~GpioEncoder() = default;
 
 Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "encoder config:";
-    for (const auto& p : problems) message += " " + p + ";";
-    message.pop_back();
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty()) return config_error("encoder config", problems);
   ChipPtr chip = open_gpio_chip(config.chip);
   if (!chip) {
     const int err = errno;
@@ -165,7 +156,7 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
   const int err_a = errno;
   const int b = gpiod_line_get_value(lines[1]);
   const int err_b = errno;
-  const std::uint64_t read_end = monotonic_ns();
+  const std::uint64_t read_end = static_cast<std::uint64_t>(monotonic_ns());
   if (a < 0) return os_error(err_a, "encoder line_a: cannot read its level");
   if (b < 0) return os_error(err_b, "encoder line_b: cannot read its level");
   const std::uint64_t margin_ns = std::uint64_t{config.edge_latency_us} * 1000u;

@@ -1,7 +1,6 @@
 #include "lever/platform/modbus_gauge.hpp"
 
 #include <pthread.h>
-#include <time.h>
 
 #include <algorithm>
 #include <array>
@@ -18,18 +17,13 @@
 #include "lever/platform/latest_value.hpp"
 #include "lever/platform/modbus_failure.hpp"
 #include "lever/platform/modbus_register_decode.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 #include "modbus_context.hpp"
 
 namespace lever::platform {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::int64_t monotonic_ns() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return std::int64_t{now.tv_sec} * 1'000'000'000 + now.tv_nsec;
-}
 
 bool is_saturated(double raw, const GaugeRegisterMap& map) noexcept {
   return (map.saturation_raw_min && raw <= *map.saturation_raw_min) ||

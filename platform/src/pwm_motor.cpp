@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <utility>
 
+#include "lever/platform/config_error.hpp"
 #include "lever/platform/torque_to_duty.hpp"
 #include "motor_lines.hpp"
 #include "motor_stop_registry.hpp"
@@ -59,12 +60,7 @@ PwmMotor& PwmMotor::operator=(PwmMotor&&) noexcept = default;
 PwmMotor::~PwmMotor() = default;
 
 Result<PwmMotor> PwmMotor::open(const PwmMotorConfig& config) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "motor config:";
-    for (const auto& p : problems) message += " " + p + ";";
-    message.pop_back();
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty()) return config_error("motor config", problems);
   auto pwm = SysfsPwm::open(config);
   if (!pwm) return pwm.error();
   auto lines = MotorLines::open(config);

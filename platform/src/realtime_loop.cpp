@@ -11,6 +11,8 @@
 #include <ctime>
 #include <utility>
 
+#include "lever/platform/config_error.hpp"
+
 namespace lever::platform {
 
 namespace {
@@ -53,19 +55,8 @@ void append(std::string& warning, const std::string& text) {
 
 }  // namespace
 
-std::int64_t RealtimeLoop::monotonic_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
-}
-
 Result<RealtimeLoop> RealtimeLoop::open(const RealtimeConfig& config) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "real-time config:";
-    for (const auto& p : problems) message += " " + p + ";";
-    message.pop_back();
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty()) return config_error("real-time config", problems);
   RealtimeLoop loop;
   loop.thread_ = ::gettid();
   loop.period_ns_ = config.period.count();

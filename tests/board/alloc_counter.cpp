@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdlib>
 
 namespace {
 std::atomic<bool> counting{false};
@@ -10,11 +11,18 @@ std::atomic<std::uint64_t> allocations{0};
 
 #if defined(__SANITIZE_ADDRESS__)
 
-namespace lever::test {
-bool alloc_counting_available() noexcept { return false; }
-void alloc_count_begin() noexcept {}
-std::uint64_t alloc_count_end() noexcept { return 0; }
-}  // namespace lever::test
+// AddressSanitizer owns malloc; it calls a hook on every allocation instead (sanitizer/allocator_interface.h, which
+// GCC does not install; the function is libasan's).
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
+                                                         void (*free_hook)(const volatile void*));
+namespace {
+void count_allocation(const volatile void*, std::size_t) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1, std::memory_order_relaxed);
+}
+void ignore_free(const volatile void*) {}  // libasan installs no hook pair with a null half
+// 0 when libasan refused the hooks; then nothing would be counted, so that is a failure, not a quiet zero.
+const int hooks_installed = __sanitizer_install_malloc_and_free_hooks(count_allocation, ignore_free);
+}  // namespace
 
 #else
 
@@ -41,9 +49,13 @@ void* realloc(void* p, std::size_t size) {
 void free(void* p) { __libc_free(p); }
 }
 
+#endif
+
 namespace lever::test {
-bool alloc_counting_available() noexcept { return true; }
 void alloc_count_begin() noexcept {
+#if defined(__SANITIZE_ADDRESS__)
+  if (hooks_installed == 0) std::abort();  // allocations could not be counted: no check may pass on a quiet zero
+#endif
   allocations.store(0);
   counting.store(true);
 }
@@ -52,5 +64,3 @@ std::uint64_t alloc_count_end() noexcept {
   return allocations.load();
 }
 }  // namespace lever::test
-
-#endif

@@ -10,7 +10,7 @@
 #include "lever/app/gauge_port.hpp"
 #include "lever/fw/strain_gauge.hpp"
 #include "lever/platform/modbus_gauge_presets.hpp"
-#include "lever/platform/realtime_loop.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 #include "modbus_test_servers.hpp"
 
 using namespace lever;
@@ -37,7 +37,7 @@ TEST_CASE(
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     ++tick;
     port.now_tick = tick;
-    port.now_ns = RealtimeLoop::monotonic_ns();
+    port.now_ns = lever::platform::monotonic_ns();
     const auto t0 = std::chrono::steady_clock::now();
     const auto reading = port.latest();
     slowest_latest_us = std::max(

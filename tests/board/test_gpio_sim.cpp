@@ -125,10 +125,9 @@ class Session {
 
   void drain() {
     std::array<EncoderEdge, 256> buffer{};
-    const bool count_allocs = lever::test::alloc_counting_available();
-    if (count_allocs) lever::test::alloc_count_begin();
+    lever::test::alloc_count_begin();
     const auto d = encoder_.drain_edges(buffer.data(), buffer.size());
-    if (count_allocs) allocations_ += lever::test::alloc_count_end();
+    allocations_ += lever::test::alloc_count_end();
     ++drains_;
     lost_ += d.lost;
     for (std::size_t i = 0; i < d.count; ++i) {
@@ -158,8 +157,7 @@ class Session {
 
   void report(const char* what, const GenSummary& s) const {
     const auto& st = encoder_.stats();
-    const std::string allocs =
-        lever::test::alloc_counting_available() ? std::to_string(allocations_) : "not counted (ASan)";
+    const std::string allocs = std::to_string(allocations_);
     std::printf(
         "measured: %s: generated %llu edges in %.2f s (%.0f edges/s); delivered %llu edges, %llu index; decoded "
         "%lld; lost %llu (fifo_full %llu, impossible %llu, reordered %llu, resyncs %llu); level checks %llu; "
@@ -227,7 +225,7 @@ TEST_CASE("paced quadrature is counted exactly: 4000 edges forward, then 1500 ba
   // The level check ran all along and never found the lines elsewhere.
   CHECK(s.encoder().stats().level_checks > 100);
   CHECK(s.encoder().stats().resyncs == 0);
-  if (lever::test::alloc_counting_available()) CHECK(s.allocations() == 0);
+  CHECK(s.allocations() == 0);
 }
 
 TEST_CASE("index rises are delivered where the index line rose") {

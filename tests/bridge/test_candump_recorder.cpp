@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "candump_recorder.hpp"
+#include "skip.hpp"
 
 namespace fs = std::filesystem;
 using lever::bridge::CandumpRecorder;
@@ -516,10 +517,7 @@ TEST_CASE("recorder: a file that cannot be created is refused with its name", "[
 
 TEST_CASE("recorder: a full disk is counted, not thrown, and the recorder goes on", "[recorder]") {
   // /dev/full fails every write with ENOSPC.
-  if (::access("/dev/full", W_OK) != 0) {
-    WARN("no writable /dev/full; skipped");
-    return;
-  }
+  if (::access("/dev/full", W_OK) != 0) LEVER_SKIP("no writable /dev/full on this machine");
   RecorderConfig config = config_for("/dev/full");
   CandumpRecorder recorder(config);
   for (std::uint64_t i = 0; i < 10; ++i) REQUIRE(recorder.record(numbered_time(i), "vcan0", numbered_frame(i)));
@@ -538,10 +536,7 @@ TEST_CASE("recorder: a full disk is counted, not thrown, and the recorder goes o
 }
 
 TEST_CASE("recorder: can-utils' log2asc converts the log, one line per frame", "[recorder][can-utils]") {
-  if (!tool_installed("log2asc")) {
-    WARN("log2asc (can-utils) is not installed; skipped");
-    return;
-  }
+  if (!tool_installed("log2asc")) LEVER_SKIP("log2asc (can-utils, in scripts/setup) is not installed");
   RecorderDir dir;
   const auto log = dir.file("both.log");
   const auto asc = dir.file("both.asc");
@@ -587,10 +582,7 @@ TEST_CASE("recorder: can-utils' log2asc converts the log, one line per frame", "
 }
 
 TEST_CASE("recorder: canplayer reads the log (where the kernel has CAN sockets)", "[recorder][can-utils]") {
-  if (!tool_installed("canplayer")) {
-    WARN("canplayer (can-utils) is not installed; skipped");
-    return;
-  }
+  if (!tool_installed("canplayer")) LEVER_SKIP("canplayer (can-utils, in scripts/setup) is not installed");
   RecorderDir dir;
   const auto log = dir.file("replay.log");
   const auto out = dir.file("replay.out");
@@ -607,10 +599,8 @@ TEST_CASE("recorder: canplayer reads the log (where the kernel has CAN sockets)"
   // canplayer opens a CAN socket even so; without one (no AF_CAN in this kernel or container) it cannot run.
   const int status = run("canplayer -t -I '" + log.string() + "' stdout=vcan0 > '" + out.string() + "' 2>&1");
   const std::string output = read_file(out);
-  if (status != 0 && output.find("socket") != std::string::npos) {
-    WARN("canplayer cannot open a CAN socket here (" << output << "); skipped");
-    return;
-  }
+  if (status != 0 && output.find("socket") != std::string::npos)
+    LEVER_SKIP("canplayer cannot open a CAN socket on this machine (no AF_CAN in its kernel or container): " + output);
   REQUIRE(status == 0);
   std::vector<std::string> printed;
   std::istringstream in(output);

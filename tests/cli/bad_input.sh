@@ -2,9 +2,10 @@
 # Bad input, class by class, against every program (docs/bad-input.md is the table this checks): each case
 # asserts the exit code, the message, and what is left on disk. Every program runs under `timeout`: a hang
 # is a failure, not a stuck test. The count of bad-input cases is printed at the end.
-# usage: bad_input.sh lever-codec lever-hil lever-fw lever-bridge firmware/config
+# usage: bad_input.sh lever-codec lever-hil lever-fw lever-bridge firmware/config lever-fw-sim
 set -uo pipefail
 codec=$(realpath "$1") hil=$(realpath "$2") fw=$(realpath "$3") bridge=$(realpath "$4") examples=$(realpath "$5")
+fw_sim=$(realpath "$6")
 source "$(dirname "$0")/lib.sh"
 cases=0
 
@@ -27,7 +28,7 @@ no_temporaries() {  # NAME DIR: no hidden temporary of an atomic write left in D
 }
 
 # --- Exit codes, --help and --version: the same in every program -------------------------------------------
-for p in "$codec" "$hil" "$fw" "$bridge"; do
+for p in "$codec" "$hil" "$fw" "$bridge" "$fw_sim"; do
   name=$(basename "$p")
   run "$p" --help
   check "$name --help: exit 0" test "$code" -eq 0
@@ -152,9 +153,9 @@ num "generate --duration 1e300" "--duration must be" "$codec" generate --kind fo
 num "generate --seed -1 (wrapped)" "--seed must be a seed in [0, 18446744073709551615], got '-1'" \
   "$codec" generate --kind force --seed -1 --out "$work/o.csv"
 num "generate --seed 2^64" "--seed must be a seed" "$codec" generate --kind force --seed 99999999999999999999 --out "$work/o.csv"
-num "lever-fw --duration nan" "--duration must be a duration in seconds in [0.1, 86400], got 'nan'" \
-  "$fw" --config "$examples/top.toml" --sim --duration nan
-num "lever-fw --duration -1" "--duration must be" "$fw" --config "$examples/top.toml" --sim --duration -1
+num "lever-fw-sim --duration nan" "--duration must be a duration in seconds in [0.1, 86400], got 'nan'" \
+  "$fw_sim" --config "$examples/top.toml" --duration nan
+num "lever-fw-sim --duration -1" "--duration must be" "$fw_sim" --config "$examples/top.toml" --duration -1
 num "lever-bridge --site-id nan" "--site-id must be a whole number in [0, 255], got 'nan'" "$bridge" --site-id nan
 num "lever-bridge --site-id 256" "--site-id must be a whole number in [0, 255], got 256" "$bridge" --site-id 256
 num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [1, 99], got '1.5'" \

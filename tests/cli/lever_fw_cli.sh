@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # lever-fw as a user runs it: help and version, every kind of configuration error (message and exit 2),
-# the example configurations, --check-config round trips, and --sim with its status lines.
+# the example configurations, --check-config round trips, the board mode without a board, --motor-off.
 # usage: lever_fw_cli.sh path/to/lever-fw path/to/firmware/config
 set -uo pipefail
 fw=$1
@@ -19,7 +19,7 @@ bad_config() {  # NAME EXPECTED_MESSAGE TOML
 }
 
 "$fw" --help >"$work/help"; check "--help exits 0" test $? -eq 0
-check "--help documents --sim and the exit codes" grep -q -- "--sim" "$work/help"
+check "--help documents the board's options" grep -q -- "--motor-off" "$work/help"
 check "--help documents the exit codes" grep -q "2 bad input" "$work/help"
 "$fw" --version >"$work/version"; check "--version exits 0" test $? -eq 0
 check "--version names the program" grep -q "lever-fw" "$work/version"
@@ -66,21 +66,6 @@ done
 "$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
 check "--role overrides the file" grep -q '^role = "top"' "$work/override"
 
-"$fw" --config "$examples/top.toml" --sim --fast --duration 2 --stats-json >"$work/stats" 2>"$work/err"; code=$?
-check "--sim exits 0" test "$code" -eq 0
-check "--sim prints a status line a second" test "$(wc -l <"$work/stats")" -ge 3
-check "status lines are JSON with the documented fields" \
-  jq -e 'has("role") and has("state") and has("faults") and has("position_valid") and has("force_n") and
-         has("wakeup_latency_us") and has("step_us") and has("encoder") and has("modbus") and .role == "top"' "$work/stats" >/dev/null
-check "the simulated TOP homes and arms" jq -se 'map(.state) | index("armed") != null' "$work/stats" >/dev/null
-check "passivity is off by default and sends no energy frames" \
-  jq -se 'all(.passivity.mode == "off" and .passivity.energy_sent == 0)' "$work/stats" >/dev/null
-sed 's/^mode = "off"/mode = "tdpa"/' "$examples/hsi.toml" >"$work/hsi-tdpa.toml"
-"$fw" --config "$work/hsi-tdpa.toml" --sim --fast --duration 3 --stats-json >"$work/stats-tdpa" 2>"$work/err"
-check "with control.passivity.mode = tdpa the HSI sends energy frames and reports its energy" \
-  jq -se 'last | .passivity.mode == "tdpa" and .passivity.energy_sent > 0 and .passivity.observed_energy_j >= -1e-6
-          and .passivity.dissipated_energy_j >= 0' "$work/stats-tdpa" >/dev/null
-
 # On a machine without the board's hardware: a runtime failure naming what could not be opened, no hang.
 printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n' >"$work/nochip.toml"
 timeout 20 "$fw" --config "$work/nochip.toml" 2>"$work/err"; code=$?
@@ -102,7 +87,9 @@ printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.
 timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1
 check "--motor-off without the PWM: names it" grep -q "motor-off: cannot open the motor.*no-such-sys" "$work/err"
-"$fw" --config "$work/motor.toml" --motor-off --sim 2>/dev/null; code=$?
-check "--motor-off with --sim: exit 2 (got $code)" test "$code" -eq 2
+"$fw" --config "$work/motor.toml" --motor-off --check-config 2>/dev/null; code=$?
+check "--motor-off with --check-config: exit 2 (got $code)" test "$code" -eq 2
+"$fw" --config "$examples/top.toml" --sim 2>/dev/null; code=$?
+check "the simulator is not in lever-fw: --sim is bad input, exit 2 (got $code)" test "$code" -eq 2
 
 report "lever-fw cli"

@@ -7,13 +7,11 @@
 //   field) at every armed tick; without tdpa, below -10 mJ somewhere (a tenth of the ~0.1 J a tap puts through
 //   a port);
 // - protection: no lever trips its own protection (TORQUE_LIMIT: the demand above the 1 N m limit for 250 ms;
-//   POSITION_LIMIT) while the scenario runs. The torque sent to the motor never exceeds the limit by
-//   construction (the clamp), so the bound is on what the controllers demand;
-// - position: once neither lever has felt a contact force for 1 s (five time constants of the TOP's drift pull
-//   as it then was, 5/s), the TOP is within 10 mrad (1 mm at the 0.1 m tip) of where the HSI was one nominal delay
-//   earlier. Found later: wall-tap has such windows only before its first contact, so this judges the free motion's
-//   tracking, not the drift the controller leaves. That is judged separately, with the same bound, in the windows
-//   after a contact that wall-tap has (Outcome::max_rest_offset_after_contact_rad), fixed before its results;
+//   POSITION_LIMIT) while the scenario runs. The bound is on what the controllers demand: the torque sent to the
+//   motor is clamped to the limit whatever they demand;
+// - position: once neither lever has felt a contact force for 1 s, the TOP is within 10 mrad (1 mm at the 0.1 m
+//   tip) of where the HSI was one nominal delay earlier; wall-tap has such windows only before its first contact,
+//   so the same bound is judged again 0.5 s after each contact, at rest (docs/firmware.md says why both);
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -29,7 +27,6 @@ namespace {
 
 struct Outcome {
   double min_observed_j[2] = {0.0, 0.0};  // HSI, TOP
-  double max_torque_nm = 0.0;             // sent to the motors
   std::uint32_t lever_faults = 0;
   double onsets_per_s = 0.0;
   double max_drift_rad = 0.0;  // after the transient (above)
@@ -37,10 +34,8 @@ struct Outcome {
   // The same, only while both levers are at rest (the HSI then and one delay earlier, the TOP over the last
   // 10 ms, all below 0.05 rad/s): the offset the passivity controller leaves, without free motion's tracking.
   double max_rest_offset_rad = 0.0;
-  // The drift's windows above are the free motion before the first contact: wall-tap never goes a second
-  // without a felt force after it. The drift the controller leaves after a contact is judged in the windows that
-  // do come: 0.5 s after the last felt force (two and a half time constants of the 5/s pull it was fixed with: a
-  // gap left at the contact's end down to 8 %), both levers armed; and the same at rest.
+  // The drift the controller leaves after a contact: 0.5 s after the last felt force, both levers armed; and the
+  // same at rest. (The windows above come only before the first contact: wall-tap never rests a second after it.)
   double max_drift_after_contact_rad = 0.0;
   std::size_t after_contact_ticks = 0;
   double max_rest_offset_after_contact_rad = 0.0;
@@ -60,7 +55,7 @@ Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::Pass
   c.network.jitter_ms = delay_ms / 10.0;
   c.network.loss = delay_ms > 0.0 ? 0.01 : 0.0;
   for (auto* fw : {&c.hsi_firmware, &c.top_firmware}) {
-    fw->comms_timeout = 300;  // the watchdog stays out of it, as in issue 14's runs
+    fw->comms_timeout = 300;  // the watchdog stays out of it: the delay, not the timeout, is under test
     fw->passivity.mode = mode;
     fw->passivity.reserve_j = reserve_j;
     fw->passivity.display_spend_time_s = display_spend_s;
@@ -70,8 +65,6 @@ Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::Pass
   Outcome o;
   c.observer = [&](const SimView& v) {
     if (v.t < 0.0) return;
-    o.max_torque_nm =
-        std::max({o.max_torque_nm, std::fabs(v.hsi.telemetry().torque_nm), std::fabs(v.top.telemetry().torque_nm)});
     if (!v.hsi.supervisor().armed() || !v.top.supervisor().armed()) return;
     o.min_observed_j[0] = std::min(o.min_observed_j[0], v.hsi.telemetry().observed_energy_j);
     o.min_observed_j[1] = std::min(o.min_observed_j[1], v.top.telemetry().observed_energy_j);
@@ -109,7 +102,6 @@ Outcome run(double delay_ms, fw::PassivityMode mode, double reserve_j = fw::Pass
 }  // namespace
 
 TEST_CASE("tdpa keeps each port passive under delay; without it the channel makes energy", "[hil][passivity]") {
-  const double limit = fw::LeverConfig{}.torque_limit_nm;
   for (const double delay_ms : {10.0, 25.0, 50.0, 100.0}) {
     CAPTURE(delay_ms);
     const auto with = run(delay_ms, fw::PassivityMode::tdpa);
@@ -121,16 +113,13 @@ TEST_CASE("tdpa keeps each port passive under delay; without it the channel make
     }
     // What tdpa buys: without it the channel puts out energy nobody put in.
     CHECK(std::min(without.min_observed_j[0], without.min_observed_j[1]) < -0.010);
-    // The clamp, whatever the controllers demand.
-    CHECK(with.max_torque_nm <= limit);
-    CHECK(without.max_torque_nm <= limit);
   }
 }
 
-// The bounds are checked on seeds 1-5: each counts as met at a delay only when it holds for every seed there, so
-// a different trajectory (another seed, another CPU's libm) does not meet it by chance. The means over seeds
-// 1-10 are in docs/firmware.md, "Passivity under delay". Where a bound is not met the test carries Catch's
-// shouldfail, so it fails once the bound is met and the test can move over.
+// Each bound counts as met at a delay only when it holds for every one of seeds 1-5, so that another trajectory
+// (another seed, another CPU's libm) does not meet it by chance. A bound not met is one test per delay carrying
+// Catch's shouldfail: it fails once the bound is met, and the test moves over. Measurements: docs/firmware.md,
+// "Passivity under delay".
 constexpr std::uint64_t kSeeds[] = {1, 2, 3, 4, 5};
 constexpr double kDelaysMs[] = {10.0, 25.0, 50.0, 100.0};
 const double kReserveJ = fw::PassivityConfig{}.reserve_j;
@@ -139,9 +128,6 @@ Outcome tdpa_run(double delay_ms, std::uint64_t seed) {
   return run(delay_ms, fw::PassivityMode::tdpa, kReserveJ, seed);
 }
 
-// At 100 ms this was not met until the reserve share (docs/firmware.md, "Reserve share"): before it, 2 of seeds 1-30
-// tripped on x86-64 (a TOP starved while the HSI's input filled its own reserve); with it none of seeds 1-30 on
-// x86-64 nor of seeds 1-10 under arm64's libm.
 TEST_CASE("with tdpa no lever trips its protection at 10, 25, 50 and 100 ms", "[hil][passivity]") {
   for (const double delay_ms : kDelaysMs) {
     for (const auto seed : kSeeds) {
@@ -151,7 +137,7 @@ TEST_CASE("with tdpa no lever trips its protection at 10, 25, 50 and 100 ms", "[
   }
 }
 
-// What tdpa buys at 100 ms, against the loop without it (about 36 trips per run).
+// What tdpa buys at 100 ms, against the loop without it.
 TEST_CASE("at 100 ms tdpa trips the protection far less often than the loop without it", "[hil][passivity]") {
   std::uint32_t with = 0, without = 0;
   for (const auto seed : kSeeds) {
@@ -176,10 +162,8 @@ TEST_CASE("the baseline: without tdpa the levers trip their protection from 25 m
   }
 }
 
-// The drift measures judge something in every run. After a contact the windows are short at 100 ms, where the
-// contact chatters and a lever can trip (windows need both armed): 166 and 172 ticks on seeds 2 and 4, and 99 on
-// seed 4 once the rest frames were repeated (it then tripped twice); so that bound is on each delay's five runs
-// together (at least 100 ticks each on the mean), and every run must have some.
+// The drift measures judge something in every run. After a contact the windows can be short (at 100 ms the contact
+// chatters, and a window needs both levers armed), so that bound is on each delay's five runs together.
 TEST_CASE("every delayed tdpa run has quiet stretches to judge the drift in", "[hil][passivity]") {
   for (const double delay_ms : kDelaysMs) {
     std::size_t after_contact = 0;
@@ -206,39 +190,44 @@ void check_drift_and_chatter(double delay_ms, bool drift, bool chatter) {
   }
 }
 
-// Met at 25 ms since the reserve share (docs/firmware.md, "Reserve share"): seeds 1-5 within 10 mrad on x86-64 and
-// under arm64's libm; before it, seed 5 under arm64's libm was not (10.9 mrad).
 TEST_CASE("at 25 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
           "[hil][passivity]") {
   check_drift_and_chatter(25.0, true, false);
 }
 
-// Met at every delay since the TOP's pull acts in contact too, aimed no further past the lever than the motor can
-// press (top_role.hpp). Before, at 50 and 100 ms (means over seeds 1-10: 4.63 and 6.58 onsets/s against 2.2 at zero
-// delay; seeds 1 and 3-5 above twice their zero-delay runs at 50 ms, all at 100 ms) the press stayed a few mrad deep
-// and the HSI's one-count velocity pulses bounced the lever off the wall at about 50 Hz (docs/firmware.md).
+// Met since the TOP's pull acts in contact too, aimed no further past the lever than the motor can press
+// (top_role.hpp); without it a shallow press bounced off the wall (docs/firmware.md).
 TEST_CASE("at 10, 25, 50 and 100 ms tdpa keeps contact onsets within twice the zero-delay run's", "[hil][passivity]") {
   for (const double delay_ms : kDelaysMs) check_drift_and_chatter(delay_ms, false, true);
 }
 
-// Not met at 10, 50 and 100 ms. At 50 and 100 ms (means over seeds 1-10: 7.3 and 11.5 mrad) the loop without tdpa
-// shows the same excursions (seed 4 at 50 ms: 16.9 against 16.5 mrad at the first defaults): the measure includes
-// free motion, where the jitter puts a fast reach several milliseconds off the nominal delay (docs/firmware.md). At
-// 10 ms seeds 1-5 (and 1-20) stay within it on x86-64 (largest 6.5 mrad), but under arm64's libm seed 2 does not
-// since the reserve share: 10.26 mrad (8.87 before). Traced: a 4.2 rad/s reach just before the first touch, in which
-// the TOP runs 7 mrad past its own reference as it brakes; before any contact the share moves only microjoules (the
-// display shows the gauge's noise), but the energy frames that carry them go 2.5 times as often and shift the
-// data frames on the bus, and the trajectories part.
-TEST_CASE("at 10, 50 and 100 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
+// Met at 10 ms on x86-64 only: under arm64's libm one seed's trajectory parts from x86-64's and goes past it
+// (docs/firmware.md, traced), so there the test is an expected failure.
+#if defined(__aarch64__)
+#define LEVER_EXPECTED_TO_FAIL_ON_ARM64 "[!shouldfail]"
+#else
+#define LEVER_EXPECTED_TO_FAIL_ON_ARM64 ""
+#endif
+TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
+          "[hil][passivity]" LEVER_EXPECTED_TO_FAIL_ON_ARM64) {
+  check_drift_and_chatter(10.0, true, false);
+}
+
+// Not met at 50 and 100 ms: the measure includes free motion, where the jitter alone puts a fast reach several
+// milliseconds off the nominal delay, and the loop without tdpa shows the same excursions (docs/firmware.md).
+TEST_CASE("at 50 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
           "[hil][passivity][!shouldfail]") {
-  for (const double delay_ms : {10.0, 50.0, 100.0}) check_drift_and_chatter(delay_ms, true, false);
+  check_drift_and_chatter(50.0, true, false);
+}
+
+TEST_CASE("at 100 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
+          "[hil][passivity][!shouldfail]") {
+  check_drift_and_chatter(100.0, true, false);
 }
 
 // When a contact ends the TOP is behind the HSI by the depth the hand went past the wall that the TOP did not follow
 // (at most the motor's press, torque limit / kp, past the lever, and only as far as energy allowed); the pull closes
-// that. With the first default pull, 5/s, and no pull in contact, this was not met at any delay (means over seeds
-// 1-10 of each run's largest: 7.1, 10.7, 10.9 and 11.4 mrad at 10-100 ms; without tdpa 1.7, 1.5, 0.6 and 5.1); at
-// 10/s it is from 25 ms on (docs/firmware.md).
+// that (docs/firmware.md, "Position drift").
 void check_offset_after_contact(double delay_ms, std::uint64_t last_seed) {
   for (std::uint64_t seed = 1; seed <= last_seed; ++seed) {
     const auto o = tdpa_run(delay_ms, seed);
@@ -252,12 +241,9 @@ TEST_CASE("from 25 ms on, after a contact tdpa leaves the TOP at rest within 10 
   for (const double delay_ms : {25.0, 50.0, 100.0}) check_offset_after_contact(delay_ms, 5);
 }
 
-// At 10 ms the pull alone did not meet it, on seeds 1-10 (the event comes once in several runs, so seeds 1-5
-// would meet it on x86-64 by chance, hence ten seeds here): seed 6 on x86-64, 14 mrad, and seed 4 under arm64's
-// libm, 36 mrad. Traced: the HSI comes to rest, its last one-count velocity frame (0.38 rad/s) arrives and the
-// zero after it is lost (1 % loss), and the TOP's receiver holds 0.38 rad/s until the 100 ms refresh: the
-// deadband's exposure to loss, not the passivity's. Met since the frame that brings a stream to rest is repeated
-// 10 ms later (LeverConfig::rest_repeat; largest 3.1 mrad, arm64 2.9); with the repeat off this fails again.
+// Ten seeds here: the event this guards against (the frame that brings the HSI to rest lost, and the TOP holding
+// its last velocity until the refresh) comes once in several runs; LeverConfig::rest_repeat is what meets it
+// (docs/firmware.md, "The lost rest frame").
 TEST_CASE("at 10 ms, after a contact tdpa leaves the TOP at rest within 10 mrad of the delayed HSI",
           "[hil][passivity]") {
   check_offset_after_contact(10.0, 10);
@@ -265,8 +251,7 @@ TEST_CASE("at 10 ms, after a contact tdpa leaves the TOP at rest within 10 mrad 
 
 // What the display's spread spending buys (PassivityConfig::display_spend_time_s): against the literature's
 // controller, which lets the held energy out at once and then cuts the whole force, the same runs at 50 ms.
-// Direction only, chosen after the table in docs/firmware.md was measured (means over seeds 1-10: 4.05 against
-// 6.06 onsets/s with the drift pull at 5/s; 4.49 against 6.72 at 10/s).
+// Direction only: it was chosen after docs/firmware.md's table was measured.
 TEST_CASE("at 50 ms the display's spread spending gives fewer contact onsets than spending at once",
           "[hil][passivity]") {
   double spread = 0.0, at_once = 0.0;

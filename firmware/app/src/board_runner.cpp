@@ -25,7 +25,7 @@ namespace {
 constexpr int kRuntimeFailure = 1;
 
 struct BoardHal : fw::Ports<platform::GpioEncoder, GaugePort, platform::PwmMotor, platform::BoardCanPort> {
-  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::RealtimeLoop::monotonic_ns()); }
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::monotonic_ns()); }
 };
 static_assert(fw::LeverHal<BoardHal>);
 static_assert(fw::HasStepClock<BoardHal>);
@@ -107,7 +107,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
       [&](fw::Tick now) {
         if (stop_flag.load(std::memory_order_relaxed) || platform::stop_signal_received() != 0) stop.request_stop();
         hal.force_.now_tick = now;
-        hal.force_.now_ns = platform::RealtimeLoop::monotonic_ns();
+        hal.force_.now_ns = platform::monotonic_ns();
         lever.step(now);
         if (now % 100 == 0) latest.publish(snapshot(lever, now));
         if (now % 1000 == 0) {  // once a second: a histogram walk and one system call

@@ -1,22 +1,17 @@
-// lever-fw: the program a lever controller runs. Loads its TOML configuration, and runs the lever either on
-// the board's hardware or, with --sim, against the in-process HIL (the other lever, the wall, the operator,
-// the buses and the link simulated), paced to the wall clock.
+// lever-fw: the program a lever controller runs. Loads its TOML configuration and runs the lever on the board's
+// hardware. The same firmware against the simulated testbed is lever-fw-sim, a program of the HIL's (hil/fw-sim).
 #include <fmt/format.h>
 
 #include <atomic>
-#include <chrono>
 #include <csignal>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "lever/app/board_runner.hpp"
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
-#include "lever/hil/simulation.hpp"
 #include "lever/program/choices.hpp"
-#include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
 
 namespace {
@@ -28,48 +23,6 @@ constexpr int kBadInput = program::kBadInput;
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop.store(true); }
 
-struct Stop {};  // unwinds the simulation when a signal asks to stop
-
-// --sim: this lever's configuration in the HIL's testbed, the other lever at its defaults.
-int run_sim(const app::FwConfig& config, double duration_s, bool stats_json, bool fast) {
-  hil::SimConfig sim;
-  sim.duration_s = duration_s;
-  const bool hsi = config.lever.role == protocol::Role::hsi;
-  auto& simulated = hsi ? sim.hsi_firmware : sim.top_firmware;
-  simulated = config.lever;
-  // The simulated gauge is the HIL's ADC, not the board's Modbus amplifier (which reports newtons): it keeps
-  // the calibration the HIL's gauge model is made for.
-  simulated.gauge = hil::SimConfig::default_firmware(config.lever.role).gauge;
-  sim.velocity_codec = (hsi ? config.lever : sim.hsi_firmware).motion_codec;
-  sim.force_codec = (hsi ? sim.top_firmware : config.lever).force_codec;
-  const auto wall_start = std::chrono::steady_clock::now();
-  sim.observer = [&](const hil::SimView& v) {
-    if (g_stop.load()) throw Stop{};
-    if (!fast) std::this_thread::sleep_until(wall_start + std::chrono::milliseconds(v.tick));
-    if (v.tick % 1000 != 0) return;
-    const auto line = app::stats_json(hsi ? app::snapshot(v.hsi, v.tick) : app::snapshot(v.top, v.tick), {});
-    if (stats_json) {
-      fmt::print("{}\n", line.dump());
-    } else {
-      fmt::print(
-          "t={:6.1f} s  {:8s} position {:+.3f} rad{}  velocity {:+.3f} rad/s  torque {:+.3f} N m  "
-          "sent {}  faults {}\n",
-          static_cast<double>(v.tick) * 1e-3, line["state"].get<std::string>(), line["position_rad"].get<double>(),
-          line["position_valid"].get<bool>() ? "" : " (not homed)", line["velocity_rad_s"].get<double>(),
-          line["torque_nm"].get<double>(), line["data_sent"].get<std::uint64_t>(), line["faults"].dump());
-    }
-    std::fflush(stdout);
-  };
-  try {
-    const auto r = hil::run_simulation(sim);
-    fmt::print(stderr, "lever-fw: simulated {:.1f} s: velocity packets {:.1f} %, force packets {:.1f} %\n", duration_s,
-               100 * r.velocity_packet_rate, 100 * r.force_packet_rate);
-  } catch (const Stop&) {
-    fmt::print(stderr, "lever-fw: stopped by a signal; the simulated lever's motor is off with the simulation\n");
-  }
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,8 +30,7 @@ int main(int argc, char** argv) {
   program::describe(app, "lever-fw");
   std::string config_path, can;
   std::optional<protocol::Role> role;
-  bool check_config = false, stats_json = false, sim = false, fast = false, motor_off = false;
-  double duration_s = 10.0;
+  bool check_config = false, stats_json = false, motor_off = false;
   app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")
       ->required()
       ->check(program::path());
@@ -88,14 +40,10 @@ int main(int argc, char** argv) {
   app.add_option("--can", can, "override board.can.interface");
   app.add_flag("--check-config", check_config, "validate the configuration and print it, touching no hardware");
   app.add_flag("--stats-json", stats_json, "one JSON status object per line, once a second");
-  app.add_flag("--sim", sim, "run against the in-process HIL instead of the board's hardware");
-  app.add_option("--duration", duration_s, "with --sim: simulated seconds")
-      ->check(program::number({0.1, 86400.0, false, false, "a duration in seconds"}));
-  app.add_flag("--fast", fast, "with --sim: as fast as the machine goes, not paced to the wall clock");
   app.add_flag("--motor-off", motor_off,
                "stop the board's motor (PWM disabled at duty 0, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
-      ->excludes("--sim", "--check-config");
+      ->excludes("--check-config");
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
   auto loaded = app::load_fw_config(config_path);
@@ -114,6 +62,5 @@ int main(int argc, char** argv) {
   if (motor_off) return app::motor_off(config);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  if (sim) return run_sim(config, duration_s, stats_json, fast);
   return app::run_board(config, stats_json, g_stop);
 }

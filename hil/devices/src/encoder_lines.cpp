@@ -8,6 +8,8 @@
 #include <thread>
 
 #include "lever/fw/hal.hpp"
+#include "lever/platform/config_error.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 #include "sim_line.hpp"
 
 namespace lever::hil::devices {
@@ -21,11 +23,7 @@ constexpr fw::AbState kGray[4] = {fw::ab(false, false), fw::ab(false, true), fw:
 
 int floor_mod4(std::int64_t value) noexcept { return static_cast<int>(((value % 4) + 4) % 4); }
 
-std::uint64_t now_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
-}
+std::uint64_t now_ns() noexcept { return static_cast<std::uint64_t>(platform::monotonic_ns()); }
 
 void sleep_until(std::uint64_t deadline_ns) noexcept {
   const timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000u), static_cast<long>(deadline_ns % 1'000'000'000u)};
@@ -141,11 +139,8 @@ namespace {
 
 platform::Result<EncoderLines> EncoderLines::open(const platform::GpioEncoderConfig& config,
                                                   EncoderLinesOptions options) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "encoder lines: ";
-    for (std::size_t i = 0; i < problems.size(); ++i) message += (i == 0 ? "" : "; ") + problems[i];
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty())
+    return platform::config_error("encoder lines", problems);
   if (!(options.max_edge_rate_hz > 0) || !std::isfinite(options.max_edge_rate_hz)) {
     return Error{
         "encoder lines: max_edge_rate_hz: " + std::to_string(options.max_edge_rate_hz) + ", must be above 0 and finite",

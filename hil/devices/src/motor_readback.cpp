@@ -12,6 +12,7 @@
 
 #include "fake_pwm_tree.hpp"
 #include "lever/hil/devices/pwm_controller_state.hpp"
+#include "lever/platform/config_error.hpp"
 #include "lever/platform/unique_fd.hpp"
 #include "sim_line.hpp"
 
@@ -152,11 +153,8 @@ struct MotorReadback::Impl {
 };
 
 platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConfig& config) {
-  if (const auto problems = config.validate(); !problems.empty()) {
-    std::string message = "motor readback: ";
-    for (std::size_t i = 0; i < problems.size(); ++i) message += (i == 0 ? "" : "; ") + problems[i];
-    return Error{message, EINVAL};
-  }
+  if (const auto problems = config.validate(); !problems.empty())
+    return platform::config_error("motor readback", problems);
   auto impl = std::make_unique<Impl>();
   impl->description = "pwmchip" + std::to_string(config.pwm_chip) + "/pwm" + std::to_string(config.pwm_channel) +
                       " under " + config.sysfs_root;

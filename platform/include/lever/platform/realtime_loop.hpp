@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "lever/fw/tick.hpp"
+#include "lever/platform/monotonic_clock.hpp"
 #include "lever/platform/period_tracker.hpp"
 #include "lever/platform/realtime_config.hpp"
 #include "lever/platform/result.hpp"
@@ -73,8 +74,6 @@ class RealtimeLoop {
   const RealtimeGrants& grants() const noexcept { return grants_; }
   const LoopStats& stats() const noexcept { return *stats_; }
   std::chrono::nanoseconds period() const noexcept { return std::chrono::nanoseconds(period_ns_); }
-
-  static std::int64_t monotonic_ns() noexcept;
 
  private:
   RealtimeLoop() = default;

@@ -26,9 +26,10 @@ struct EncoderEdge {
   bool index = false;
 };
 
-// What one drain brought. `lost` says what the source knows of edges it could not deliver: a gap in kernel
-// sequence numbers, an event FIFO overflow, line levels that disagree with the decoded state. Any non-zero
-// value means the count can no longer be trusted; the exact number is a best estimate (at least 1).
+// What one drain brought. `lost` says what the source knows of edges it could not deliver: a full kernel event
+// FIFO, two edges of one direction in a row on a line, an edge older than one already delivered, line levels that
+// disagree with the decoded state (libgpiod v1 gives no sequence numbers). Any non-zero value means the count can
+// no longer be trusted; the exact number is a best estimate (at least 1).
 struct EdgeDrain {
   std::size_t count = 0;
   std::uint32_t lost = 0;

@@ -203,8 +203,8 @@ class Lever {
   // faulted, rebooted faster than the comms timeout) ends the pair's run; and whatever it sends next is a
   // new stream. "Alongside" is the arming handshake: the peer's heartbeat echoes this lever's current arming.
   // Without it, a pair re-armed over a link slower than the host's re-arm heard each other's heartbeats from
-  // before the re-arm, "armed" and then "fault", and threw each other out again, re-arm after re-arm (traced
-  // in the HIL at 100 ms one-way: up to 53 trips in 20 s).
+  // before the re-arm, "armed" and then "fault", and threw each other out again, re-arm after re-arm
+  // (docs/can-protocol.md).
   void on_peer_heartbeat(const protocol::HeartbeatMessage& m, Tick now) noexcept {
     watchdog_.heard(now);
     if (supervisor_.armed()) {

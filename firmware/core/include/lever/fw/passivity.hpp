@@ -25,35 +25,22 @@ constexpr const char* name(PassivityMode m) noexcept {
 struct PassivityConfig {
   PassivityMode mode = PassivityMode::off;
   // TOP: the rate (1/s) at which the passive reference is pulled toward the HSI's position that rides on every
-  // motion frame, through the controller like any motion; in contact toward no further past the lever than the
-  // motor can press (top_role.hpp). When a contact ends the TOP is behind the HSI by what it did not follow of the
-  // depth the hand went past the wall, and the pull closes that. Measured (with no pull in contact, as it first was)
-  // (docs/firmware.md, "Passivity under delay"): at 5/s (a 200 ms time constant, first chosen as slower than a
-  // tap's 100-150 ms contact) 8 % of the gap, 7-13 mrad, was still there 0.5 s after a contact; 10/s closes it to
-  // 1-3 mrad for a few more contact onsets (4.49 against 4.05/s at 50 ms), 20/s gave more onsets still.
+  // motion frame; in contact no further past the lever than the motor can press (top_role.hpp). It closes the gap
+  // a contact leaves; 10/s closes it within half a second for few extra contact onsets (docs/firmware.md,
+  // "Position drift").
   double drift_gain_per_s = 10.0;
-  // Of its own input energy, the port keeps up to this much for its own output instead of passing it to the
-  // peer (docs/firmware.md, "Local reserve"). 0 is the per-port TDPA of the literature: every joule that comes
-  // in goes to the peer, and a port puts out only what the peer passed. 12.5 mJ is tau_max^2 / (2 k_p), what the
-  // TOP's position spring (40 N m/rad) holds at the 1 N m torque limit: the most a press against a stiff wall
-  // stores, so a hand that yields to the whole of a press and comes back is paid from the port's own account.
+  // Of its own input energy, the port keeps up to this much for its own output instead of passing it to the peer
+  // (0: the literature's per-port TDPA). tau_max^2 / (2 k_p), what the TOP's position spring holds at the torque
+  // limit: the most a press against a stiff wall stores (docs/firmware.md, "Local reserve").
   double reserve_j = 0.0125;
-  // Of each joule the port takes in, the share that may go to its reserve while the reserve has room; the rest is
-  // passed to the peer at once. 1 fills the reserve first and passes only what overflows it: the HSI then kept a
-  // hand's push (21 mW against a light display: 0.6 s to fill 12.5 mJ) while a TOP without energy held the wall at
-  // 0.36 N, and the hand pushed the HSI into its position limit; and the TOP kept the wall's give-back that the
-  // display needed. 0.8 was chosen from measurements (docs/firmware.md, "Reserve share"): the force error at 25 and
-  // 50 ms down by two fifths, no protection trip at 100 ms, contact onsets up by a tenth to a fifth.
+  // Of each joule the port takes in, the share that may go to its reserve while it has room; the rest goes to the
+  // peer at once. Filling the reserve first (1) starved the peer of a hand's push; the value is measured
+  // (docs/firmware.md, "Reserve share").
   double reserve_share = 0.8;
-  // HSI: the display spends the energy its port holds at most at the rate (held energy) / (this time), instead of
-  // all of it on the tick it is asked for. Spent at once, the account is empty soon after the hand starts to yield,
-  // and the displayed force then switches whole on the sign of the hand's velocity: all of it while the hand
-  // pushes in, none while it yields (traced for a hand about its rest against a press: every 10-30 ms). Spread out,
-  // the account drains exponentially and always holds something: the force allowed is held / (time x arm x
-  // speed), whole near rest and less the faster the hand yields. 40 ms is the time constant of the hand on the
-  // lever, 1 / sqrt(3 N m/rad / 5e-3 kg m^2) (docs/hil-model.md): a fade the hand can follow. 0 spends at once (the
-  // literature's controller). The TOP always spends at once: its impact on the wall needs its reserve within a
-  // few milliseconds (measured: spreading it too raised the contact onsets; docs/firmware.md).
+  // HSI: the display spends what its port holds at most at (held energy) / (this time), so that the displayed force
+  // fades as the hand yields instead of switching whole on the sign of its velocity. 40 ms is the hand's time
+  // constant on the lever (docs/hil-model.md); 0 spends at once (the literature's controller). The TOP always
+  // spends at once: its impact on the wall needs its reserve within milliseconds (docs/firmware.md).
   double display_spend_time_s = 0.040;
 };
 

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The include check must fail on a forbidden include: a tree with every room, where lever-fw includes the HIL and
+# the HIL's library includes lever::app (the two directions docs/architecture.md forbids), must be refused with
+# both named; the same tree without them must pass.
+# usage: check_includes_rejects.sh path/to/check_includes.sh
+set -uo pipefail
+check=$1
+source "$(dirname "$0")/../cli/lib.sh"
+for room in program common firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge hil/devices \
+  hil/include hil/src hil/app hil/fw-sim; do
+  mkdir -p "$work/tree/$room"
+done
+printf '#include "lever/app/fw_config.hpp"\n#include "lever/platform/result.hpp"\n' >"$work/tree/firmware/app/main.cpp"
+printf '#include "lever/hil/simulation.hpp"\n#include "lever/app/stats_line.hpp"\n' >"$work/tree/hil/fw-sim/main.cpp"
+"$check" "$work/tree" >"$work/out"; code=$?
+check "allowed includes pass: exit 0 (got $code: $(cat "$work/out"))" test "$code" -eq 0
+
+printf '#include "lever/hil/simulation.hpp"\n' >>"$work/tree/firmware/app/main.cpp"
+printf '  #  include "lever/app/fw_config.hpp"\n' >"$work/tree/hil/src/world.cpp"
+"$check" "$work/tree" >"$work/out"; code=$?
+check "forbidden includes: exit 1 (got $code)" test "$code" -eq 1
+check "lever-fw including the HIL is named with file and line" \
+  grep -qF "firmware/app/main.cpp:3: firmware/app may not include lever/hil/simulation.hpp" "$work/out"
+check "the HIL's library including lever::app is named" \
+  grep -qF "hil/src/world.cpp:1: hil/src may not include lever/app/fw_config.hpp" "$work/out"
+rm -r "$work/tree/hil/app"
+"$check" "$work/tree" >/dev/null 2>"$work/err"; code=$?
+check "a room that is gone fails the check: exit 1 (got $code)" test "$code" -eq 1
+report "include check rejects"
