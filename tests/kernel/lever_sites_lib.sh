@@ -21,6 +21,31 @@
 results=$out
 out=$(mktemp -d -p /dev/shm)
 examples=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../firmware/config" && pwd)
+# What the harness runs again and again while the levers run (its polls) must not be read from the host each
+# time: in virtual time a 9p round trip costs no guest time but all the host's, and polls made of them took most
+# of a run's wall time. So sleep, tail and grep are bash's own here, and jq runs from the guest's memory: its
+# binary and libraries copied once, started through the copied dynamic loader.
+guest_tools=$(mktemp -d -p /dev/shm)
+exec {never_ready}<> <(:)
+sleep() { read -rt "$1" -u "$never_ready" || :; }
+last_line() {  # last_line FILE: its last line (nothing when there is none)
+  local line last=''
+  [[ -r $1 ]] || return 1
+  while IFS= read -r line || [[ -n $line ]]; do last=$line; done <"$1"
+  printf '%s\n' "$last"
+}
+has_text() { [[ -r $1 && $(<"$1") == *"$2"* ]]; }  # has_text FILE TEXT
+pin_tool() {  # pin_tool PROGRAM: from here on a function of that name runs the guest's copy
+  local path lib loader
+  path=$(command -v "$1") || { echo "FAILED: no $1 to copy into the guest" >&2; return 1; }
+  cp "$path" "$guest_tools/$1"
+  while read -r lib; do cp -nL "$lib" "$guest_tools/"; done < <(ldd "$path" | awk '$2 == "=>" && $3 ~ /^\// { print $3 }')
+  loader=$(ldd "$path" | awk '$1 ~ /^\/.*ld-linux/ { print $1 }')
+  cp -L "$loader" "$guest_tools/ld.so"
+  # HOME too: jq looks for ~/.jq at each start.
+  eval "$1() { HOME=\"$guest_tools\" \"$guest_tools/ld.so\" --inhibit-cache --library-path \"$guest_tools\" \"$guest_tools/$1\" \"\$@\"; }"
+}
+pin_tool jq || exit 1
 dbc=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/common/protocol/lever.dbc
 dbc_decode=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/tools/dbc-decode
 pids=()
@@ -115,7 +140,7 @@ start_serve() {
   serve_pid=$!
   pids+=("$serve_pid")
   for _ in $(seq 600); do
-    grep -q "waiting for both" "$out/$name.serve" && return 0
+    has_text "$out/$name.serve" "waiting for both" && return 0
     kill -0 "$serve_pid" 2>/dev/null || break
     sleep 0.1
   done
@@ -134,7 +159,7 @@ start_fw() {
 # wait_for_serve NAME TEXT: until serve's log says it (120 s)
 wait_for_serve() {
   local deadline=$((SECONDS + 120))
-  while ((SECONDS < deadline)); do grep -q "$2" "$out/$1.serve" && return 0; sleep 0.2; done
+  while ((SECONDS < deadline)); do has_text "$out/$1.serve" "$2" && return 0; sleep 0.2; done
   echo "timed out waiting for serve to say '$2'" >&2
   return 1
 }
@@ -153,7 +178,7 @@ heard_armed() {
 }
 
 # last_stat ROLE JQ: the expression on the lever's newest status line
-last_stat() { tail -n 1 "$out/$1.stats" 2>/dev/null | jq -r "$2" 2>/dev/null; }
+last_stat() { last_line "$out/$1.stats" 2>/dev/null | jq -r "$2" 2>/dev/null; }
 
 # wait_for SECONDS ROLE JQ_CONDITION: until the lever's newest status line satisfies it
 wait_for() {
@@ -162,7 +187,7 @@ wait_for() {
     [[ $(last_stat "$role" "$condition") == true ]] && return 0
     sleep 0.2
   done
-  echo "timed out after ${1}s waiting for $role: $condition (last: $(tail -n 1 "$out/$role.stats"))" >&2
+  echo "timed out after ${1}s waiting for $role: $condition (last: $(last_line "$out/$role.stats"))" >&2
   return 1
 }
 
