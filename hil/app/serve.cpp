@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <optional>
 
@@ -55,10 +56,20 @@ class ServeLoop {
   double homed_at_s_ = 0.0;
 };
 
+// SIGUSR1 stops the TOP's gauge server, SIGUSR2 starts it again: a fault a test injects from outside, as it
+// would pull an amplifier's cable.
+std::atomic<int> g_gauge_signal{0};
+extern "C" void on_gauge_signal(int signal) { g_gauge_signal.store(signal, std::memory_order_relaxed); }
+
 bool ServeLoop::run(const std::atomic<bool>& stop) {
   while (!stop.load(std::memory_order_relaxed)) {
     ++tick_;
     pacer_.wait();
+    if (const int signal = g_gauge_signal.exchange(0, std::memory_order_relaxed)) {
+      if (signal == SIGUSR1) top_.stop_gauge();
+      if (signal == SIGUSR2 && !top_.start_gauge()) return false;
+      fmt::print(stderr, "lever-hil serve: the TOP's gauge {}\n", top_.gauge ? "serves again" : "stopped");
+    }
     watch_.poll(static_cast<std::int64_t>(tick_));
     const PairHeard heard = hear();
     if (!scenario_start_ && !await_arming(heard)) return false;
@@ -122,7 +133,7 @@ ServeSummary ServeLoop::finish(const SimConfig& sim) const {
                  pacer_.max_lag_ms(),
                  hsi_.encoder->stats(),
                  top_.encoder->stats(),
-                 top_.gauge ? top_.gauge->counters().requests : 0,
+                 top_.gauge_requests(),
                  watch_.frames_read()};
   metrics_.finish(s.result);
   s.result.homed_at_s = homed_at_s_;
@@ -166,6 +177,8 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop, ServeProbe* 
     return program::kRuntimeFailure;
   }
   if (probe && !probe->attach(pair->hsi, pair->top, *hsi, *top)) return program::kRuntimeFailure;
+  std::signal(SIGUSR1, on_gauge_signal);
+  std::signal(SIGUSR2, on_gauge_signal);
   print_powered_up(world, *pair);
 
   ServeLoop loop(o, sim, world, *hsi, *top, watch.value(), trace ? &*trace : nullptr, probe);

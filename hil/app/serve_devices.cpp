@@ -33,16 +33,29 @@ std::optional<LeverDevices> open_devices(const app::FwConfig& config, double ang
   d.motor = std::move(motor).value();
   const bool reads_gauge = !hsi || (config.lever.use_force_sensor && config.lever.display.closed_loop);
   if (reads_gauge) {
-    auto gauge = devices::GaugeServer::open(app::gauge_config(config.board));
-    if (!gauge) {
-      fmt::print(stderr, "lever-hil serve: {} strain gauge: {}\n", who, gauge.error().message);
-      return std::nullopt;
-    }
-    d.gauge = std::move(gauge).value();
+    d.gauge_config = app::gauge_config(config.board);
+    if (!d.start_gauge()) return std::nullopt;
   }
   fmt::print(stderr, "lever-hil serve: {} lever: encoder {}; motor {}; gauge {}\n", who, d.encoder->description(),
              d.motor->description(), d.gauge ? d.gauge->description() : std::string("none (not read)"));
   return d;
+}
+
+void LeverDevices::stop_gauge() {
+  if (!gauge) return;
+  stopped_gauges_requests += gauge->counters().requests;
+  gauge.reset();
+}
+
+bool LeverDevices::start_gauge() {
+  if (gauge || !gauge_config) return true;
+  auto started = devices::GaugeServer::open(*gauge_config);
+  if (!started) {
+    fmt::print(stderr, "lever-hil serve: strain gauge: {}\n", started.error().message);
+    return false;
+  }
+  gauge = std::move(started).value();
+  return true;
 }
 
 }  // namespace lever::hil
