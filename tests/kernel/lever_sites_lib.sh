@@ -35,9 +35,9 @@ last_line() {  # last_line FILE: its last line (nothing when there is none)
   printf '%s\n' "$last"
 }
 has_text() { [[ -r $1 && $(<"$1") == *"$2"* ]]; }  # has_text FILE TEXT
-pin_tool() {  # pin_tool PROGRAM: from here on a function of that name runs the guest's copy
-  local path lib loader
-  path=$(command -v "$1") || { echo "FAILED: no $1 to copy into the guest" >&2; return 1; }
+pin_tool() {  # pin_tool NAME [PATH]: from here on a function NAME runs the guest's copy (of PATH, or NAME's)
+  local path=${2:-} lib loader
+  [[ -n $path ]] || path=$(type -P "$1") || { echo "FAILED: no $1 to copy into the guest" >&2; return 1; }
   cp "$path" "$guest_tools/$1"
   while read -r lib; do cp -nL "$lib" "$guest_tools/"; done < <(ldd "$path" | awk '$2 == "=>" && $3 ~ /^\// { print $3 }')
   loader=$(ldd "$path" | awk '$1 ~ /^\/.*ld-linux/ { print $1 }')
@@ -50,8 +50,9 @@ dbc=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/common/protocol/lever.db
 dbc_decode=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/tools/dbc-decode
 pids=()
 
-lever_chip() {  # lever_chip ROLE: its gpio-sim chip
-  sim_chip "$1" ENC_A ENC_B MOTOR_EN MOTOR_DIR MOTOR_FAULT >/dev/null
+lever_chip() {  # lever_chip ROLE: its gpio-sim chip; ROLE_gpio is its sysfs directory (sim_gpioN/value: line N)
+  sim_chip "$1" ENC_A ENC_B MOTOR_EN MOTOR_DIR MOTOR_FAULT >/dev/null || return 1
+  printf -v "${1}_gpio" '%s' "$LEVER_GPIO_SYSFS"
 }
 pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, none exported yet
   local role dir
