@@ -144,6 +144,34 @@ TEST_CASE("every fault kind latches, makes the lever safe in one tick, and re-ar
   }
 }
 
+TEST_CASE(
+    "the decoder starts from the levels the edge source read at open: the first edge counts, B leading A "
+    "counts up",
+    "[firmware][lever][encoder]") {
+  constexpr AbState kForward[4] = {0b00, 0b01, 0b11, 0b10};  // (A << 1) | B: B rises first
+  for (int start = 0; start < 4; ++start) {
+    INFO("lines at " << kForward[start] << " when opened");
+    test::CanBus bus;
+    test::FakeHal<test::FakeEdgeEncoder> hal(bus);
+    hal.encoder_.current = kForward[start];
+    HsiLever<test::FakeHal<test::FakeEdgeEncoder>> hsi(hal, test::rig_config(protocol::Role::hsi));
+    Tick now = 1;
+    // 4000 steps forward, one per tick edge by edge, then 1500 back: as the guest's quadrature source drives them.
+    int phase = start;
+    for (int i = 0; i < 4000; ++i) {
+      hal.encoder_.push(kForward[++phase % 4]);
+      hsi.step(now++);
+    }
+    CHECK(hsi.decoder().counts() == 4000);
+    for (int i = 0; i < 1500; ++i) {
+      hal.encoder_.push(kForward[(--phase % 4 + 4) % 4]);
+      hsi.step(now++);
+    }
+    CHECK(hsi.decoder().counts() == 2500);
+    CHECK(hsi.decoder().illegal_transitions() == 0u);
+  }
+}
+
 TEST_CASE("an encoder glitch storm latches ENCODER and the TOP lets go rather than hold blind",
           "[firmware][lever][encoder]") {
   test::CanBus bus;
