@@ -257,8 +257,7 @@ class Lever {
         break;
       }
       case protocol::Opcode::home:
-        if (homing_.needed() &&
-            (supervisor_.state() == LeverState::disarmed || supervisor_.state() == LeverState::fault)) {
+        if (homing_.needed() && supervisor_.state() == LeverState::disarmed) {
           clear_encoder_fault();
           position_.invalidate();  // whatever the count said, homing is what makes it mean something
         }
