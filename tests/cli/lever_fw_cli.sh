@@ -25,6 +25,7 @@ check "--help documents the exit codes" grep -q "2 bad input" "$work/help"
 check "--version names the program" grep -q "lever-fw" "$work/version"
 "$fw" >/dev/null 2>"$work/err"; check "no --config: exit 2" test $? -eq 2
 
+: >"$work/empty.toml"
 bad_config "unknown key" "codec.motion.q: unknown key" $'[codec.motion]\nq = 0.1'
 bad_config "unknown section" "sensor.x: unknown key" $'[sensor]\nx = 1'
 bad_config "wrong type" "lever.pair: must be a whole number in [0, 15], got a string" $'[lever]\npair = "one"'
@@ -42,6 +43,33 @@ bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]
 check "missing file: exit 2" test "$code" -eq 2
 check "missing file: says why" grep -q "missing.toml: cannot read: No such file" "$work/err"
 
+# A configuration given as any kind of file: only a regular file is read, and nothing hangs.
+mkdir "$work/adir"; mkfifo "$work/afifo"
+head -c $((1024 * 1024 + 1)) /dev/zero | tr '\0' '#' >"$work/huge.toml"
+for kind in "$work/adir:a directory, not a configuration file" "$work/afifo:a FIFO, not a configuration file" \
+  "/dev/null:a device, not a configuration file" "$work/huge.toml:1048577 bytes; a configuration file is at most 1048576"; do
+  path=${kind%%:*} says=${kind#*:}
+  timeout 10 "$fw" --config "$path" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "config $path: exit 2, at once (got $code)" test "$code" -eq 2
+  check "config $path: says '$says' (got: $(cat "$work/err"))" grep -qF -- "$path: $says" "$work/err"
+  check "config $path: prints no configuration" test ! -s "$work/out"
+done
+bad_config "an integer too large for TOML" "bad.toml:2:" $'[link]\ncomms_timeout_ms = 99999999999999999999999'
+bad_config "a huge number" "link.comms_timeout_ms: must be a whole number in [1, 60000], got 1e+300" $'[link]\ncomms_timeout_ms = 1e300'
+bad_config "a huge string" "board.can: interface" "$(printf '[board.can]\ninterface = "%s"' "$(head -c 100000 /dev/zero | tr '\0' a)")"
+# Interface names as the kernel takes them, in the file and on the command line alike.
+for name in "can/0" "can:0" "can 0" "." ".." "can%d" "sixteen-bytes-xx" ""; do
+  bad_config "interface name '$name'" "board.can: interface" "$(printf '[board.can]\ninterface = "%s"' "$name")"
+  "$fw" --config "$work/empty.toml" --can "$name" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "--can '$name': exit 2 like the same name in the file (got $code)" test "$code" -eq 2
+  check "--can '$name': names the option (got: $(cat "$work/err"))" grep -qF -- "--can: board.can.interface" "$work/err"
+done
+for name in "can0" "fifteen-bytes-x" "..." "vcan-ä"; do
+  "$fw" --config "$work/empty.toml" --can "$name" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "--can '$name', a name the kernel allows: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+  check "--can '$name' is the effective interface" grep -qF -e "interface = '$name'" -e "interface = \"$name\"" "$work/out"
+done
+
 "$fw" --config "$examples/top-float32.toml" --check-config >"$work/f32"; code=$?
 check "example top-float32.toml is valid" test "$code" -eq 0
 check "example top-float32.toml reads a float32 from input registers" \
@@ -57,7 +85,6 @@ for role in hsi top; do
   check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
 done
 # The examples are every key at its default: they cannot drift from the program.
-: >"$work/empty.toml"
 for role in hsi top; do
   "$fw" --config "$work/empty.toml" --role "$role" --check-config | sed 1d >"$work/defaults.$role"
   sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
@@ -83,6 +110,27 @@ timeout 20 "$fw" --config "$work/motor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
 check "--motor-off: the PWM is disabled" test "$(head -n1 "$pwm/pwm0/enable")" = 0
 check "--motor-off: at duty 0" test "$(head -n1 "$pwm/pwm0/duty_cycle")" = 0
+# Bounded in time whatever is under its sysfs root: FIFOs, directories and loops where attributes belong.
+for case in fifo-enable fifo-export dir-duty loop-period; do
+  root=$work/sys-$case chip=$work/sys-$case/class/pwm/pwmchip0
+  mkdir -p "$chip/pwm0"
+  for f in enable duty_cycle period polarity; do printf '0\n' >"$chip/pwm0/$f"; done
+  : >"$chip/export"
+  case $case in
+    fifo-enable) rm "$chip/pwm0/enable"; mkfifo "$chip/pwm0/enable" ;;
+    fifo-export) rm -r "$chip/pwm0" "$chip/export"; mkfifo "$chip/export" ;;
+    dir-duty) rm "$chip/pwm0/duty_cycle"; mkdir "$chip/pwm0/duty_cycle" ;;
+    loop-period) rm "$chip/pwm0/period"; ln -s period "$chip/pwm0/period" ;;
+  esac
+  printf '[board.motor]\nsysfs_root = "%s"\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n' "$root" >"$work/m.toml"
+  start=$(date +%s%N)
+  timeout 20 "$fw" --config "$work/m.toml" --motor-off 2>"$work/err"; code=$?
+  elapsed_ms=$((($(date +%s%N) - start) / 1000000))
+  check "--motor-off on $case: exit 1 (got $code: $(cat "$work/err"))" test "$code" -eq 1
+  check "--motor-off on $case: done within 3 s (export_timeout_ms 1000 and a few writes; took $elapsed_ms ms)" \
+    test "$elapsed_ms" -lt 3000
+  check "--motor-off on $case: names the file" grep -q "motor-off: cannot open the motor: motor PWM: .*$root" "$work/err"
+done
 printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.toml"
 timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1

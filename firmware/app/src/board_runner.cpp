@@ -18,6 +18,7 @@
 #include "lever/platform/motor_stop_signals.hpp"
 #include "lever/platform/pwm_motor.hpp"
 #include "lever/platform/realtime_loop.hpp"
+#include "lever/program/text.hpp"
 
 namespace lever::app {
 namespace {
@@ -45,7 +46,7 @@ long thread_minor_faults() noexcept {
 template <typename T>
 std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
   if (!r) {
-    fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, r.error().message);
+    fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, program::printable(r.error().message, 400));
     return std::nullopt;
   }
   return std::move(r).value();

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "lever/program/text.hpp"
+
 namespace lever::app {
 namespace {
 
@@ -274,17 +276,24 @@ ConfigSchema schema_for(FwConfig& config) {
   return s;
 }
 
-LoadedConfig load_fw_config(const std::string& path) {
+LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides) {
   LoadedConfig out;
   auto schema = schema_for(out.config);
   if (auto e = schema.load_file(path)) {
     out.error = *e;
     return out;
   }
+  if (overrides.role) out.config.lever.role = *overrides.role;
+  if (overrides.can) {
+    if (auto e = schema.load_value("board.can.interface", toml::value<std::string>(*overrides.can), "--can")) {
+      out.error = *e;
+      return out;
+    }
+  }
   // What one key cannot say alone.
   const auto& l = out.config.lever;
   auto fail = [&](std::string_view keys, std::string_view problem) {
-    out.error = fmt::format("{}: {}: {}", path, keys, problem);
+    out.error = fmt::format("{}: {}: {}", path, keys, program::printable(problem, 400));
     return out;
   };
   if (!(l.position_min_rad < l.position_max_rad))
@@ -305,7 +314,11 @@ LoadedConfig load_fw_config(const std::string& path) {
   if (!out.config.board.realtime_cpus.empty() && !platform::parse_cpu_list(out.config.board.realtime_cpus))
     return fail("board.realtime.cpus", "not a CPU list like \"2\" or \"0,2-3\"");
   if (const auto p = realtime_config(out.config.board).validate(); !p.empty()) return fail("board.realtime", p.front());
-  if (const auto p = can_config(out.config).validate(); !p.empty()) return fail("board.can", p.front());
+  if (const auto p = can_config(out.config).validate(); !p.empty()) {
+    if (!overrides.can) return fail("board.can", p.front());
+    out.error = fmt::format("--can: board.can.{}", program::printable(p.front(), 400));
+    return out;
+  }
   if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
   return out;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Everything lever-fw is configured with: the firmware core's LeverConfig and the board's backends, as one
 // TOML file whose keys carry their units (docs/lever-fw.md lists them with defaults).
+#include <optional>
 #include <string>
 
 #include "lever/app/config_schema.hpp"
@@ -77,11 +78,19 @@ platform::BoardCanPortConfig can_config(const FwConfig& config);
 // The schema of a FwConfig: every key, bound to `config`'s fields.
 ConfigSchema schema_for(FwConfig& config);
 
-// Loads `path` over the defaults. On failure: the message naming file, key and problem.
+// The command line's overrides: applied over the file before anything is validated, each through the same
+// check as its key in the file, so that an override cannot pass what the file could not.
+struct ConfigOverrides {
+  std::optional<protocol::Role> role;  // --role: lever.role
+  std::optional<std::string> can;      // --can: board.can.interface
+};
+
+// Loads `path` over the defaults, then the overrides. On failure: the message naming file, key and problem
+// (or the option, for a problem an override brought).
 struct LoadedConfig {
   FwConfig config;
   std::string error;  // empty on success
 };
-LoadedConfig load_fw_config(const std::string& path);
+LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides = {});
 
 }  // namespace lever::app
