@@ -86,7 +86,7 @@ TEST_CASE("interface names as the kernel takes them (dev_valid_name), and no '%'
   using lever::platform::interface_name_problem;
   using namespace std::string_literals;
   for (const std::string& good : {"can0"s, "vcan1"s, "fifteen-bytes-x"s, "..."s, ".can"s, "-x"s, "can\x01"s,
-                                 "c\xC3\xA4n0"s /* can with a-umlaut: C3 A4 */, "a,b=c"s}) {
+                                  "c\xC3\xA4n0"s /* can with a-umlaut: C3 A4 */, "a,b=c"s}) {
     INFO("'" << good << "'");
     CHECK_FALSE(interface_name_problem(good).has_value());
   }

@@ -37,7 +37,19 @@ bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, inde
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
 bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
 bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
-bad_config "a gauge staler than its polls" "gauge.stale_ms: must be longer than board.gauge.poll_us" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
+bad_config "a gauge staler than its polls" "gauge.stale_ms: 5 ms does not outlast one missed poll" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
+# The gauge's timings as a relation: one missed poll costs a response timeout, RTU's a backoff more.
+bad_config "a stale window one missed poll reaches" \
+  "a reading may be 35.0 ms old (poll_us + 2 x timeout_us + timeout_us for the reconnect); at least 36 ms" \
+  $'[gauge]\nstale_ms = 35'
+bad_config "a longer timeout alone" "a reading may be 65.0 ms old" $'[board.gauge]\ntimeout_us = 20000'
+bad_config "RTU with a longer backoff" "(poll_us + 2 x timeout_us + reconnect_backoff_ms); at least 76 ms" \
+  $'[board.gauge]\ntransport = "rtu"\nreconnect_backoff_ms = 50'
+printf '[gauge]\nstale_ms = 76\n[board.gauge]\ntransport = "rtu"\nreconnect_backoff_ms = 50\n' >"$work/rtu.toml"
+"$fw" --config "$work/rtu.toml" --check-config >/dev/null 2>"$work/err"
+check "RTU with a window that outlasts one missed poll: valid ($(cat "$work/err"))" test $? -eq 0
+bad_config "a saturation bound the register never reaches" "saturation would never be seen" \
+  $'[board.gauge]\nsaturation_raw_max = 1e15'
 bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]\nfilter_hz = 800'
 "$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
 check "missing file: exit 2" test "$code" -eq 2

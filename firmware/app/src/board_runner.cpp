@@ -90,6 +90,8 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         b.modbus_polls = c.polls;
         b.modbus_errors = c.errors;
         b.modbus_timeouts = c.timeouts;
+        b.modbus_crc_errors = c.crc_errors;
+        b.modbus_exceptions = c.exceptions;
         b.modbus_reconnects = c.reconnects;
       }
       const auto line = stats_json(*s, b);

@@ -7,6 +7,9 @@
 namespace lever::app {
 namespace {
 
+// Polls in a row that may fail without the force going stale (docs/modbus-gauge.md, "Timing").
+constexpr int kMissedPollsTolerated = 1;
+
 using codec::Mode;
 using fw::Tick;
 
@@ -21,12 +24,21 @@ void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<doubl
 
 }  // namespace
 
+const platform::ModbusGaugeConfig& default_gauge() {
+  static const platform::ModbusGaugeConfig gauge = platform::preset_gross_weight_int32(platform::ModbusTcpEndpoint{});
+  return gauge;
+}
+
 fw::LeverConfig board_lever_defaults() {
   fw::LeverConfig c;
   c.gauge.newton_per_count = 1.0;
-  // A reading is as old as the poll period (5 ms) plus the response (up to the 20 ms timeout): the core's
-  // 5 ms, right for an amplifier that pushes 600 samples a second, would call every other Modbus reading stale.
-  c.gauge.stale_after = 25;
+  c.gauge.raw_min = -platform::kTestbedLoadCellCapacityN;
+  c.gauge.raw_max = platform::kTestbedLoadCellCapacityN;
+  // The core's 5 ms suits an amplifier that pushes 600 samples a second; polled over Modbus, a reading may be
+  // as old as the longest gap with one missed poll (5 + 3 x 10 ms), and one missed poll must not latch
+  // FORCE_STALE.
+  const auto gap = platform::longest_gap(default_gauge(), kMissedPollsTolerated);
+  c.gauge.stale_after = static_cast<fw::Tick>((gap.count() + 999) / 1000 + 1);
   return c;
 }
 
@@ -59,6 +71,8 @@ platform::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
   c.registers.saturation_raw_max = b.gauge_saturation_raw_max;
   c.poll_period = std::chrono::microseconds(b.gauge_poll_us);
   c.response_timeout = std::chrono::microseconds(b.gauge_timeout_us);
+  c.reconnect_backoff_initial = std::chrono::milliseconds(b.gauge_reconnect_backoff_ms);
+  if (c.reconnect_backoff_max < c.reconnect_backoff_initial) c.reconnect_backoff_max = c.reconnect_backoff_initial;
   return c;
 }
 
@@ -246,7 +260,10 @@ ConfigSchema schema_for(FwConfig& config) {
   s.number("board.gauge.saturation_raw_max", b.gauge_saturation_raw_max, -1e15, 1e15, "raw",
            "a raw value at or above is the amplifier's range end");
   s.integer("board.gauge.poll_us", b.gauge_poll_us, 100, 10000000, "us", "poll period (RTU at 115200 baud: 5-10 ms)");
-  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us", "response timeout");
+  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us",
+            "response timeout (a TCP connect's too); gauge.stale_ms must outlast one missed poll");
+  s.integer("board.gauge.reconnect_backoff_ms", b.gauge_reconnect_backoff_ms, 1, 60000, "ms",
+            "wait before a reconnect, doubled while it fails (TCP's first is at once; RTU's lets a late answer land)");
 
   s.text("board.motor.sysfs_root", b.motor_sysfs_root, "where sysfs is (tests: a tree of their own)");
   s.integer("board.motor.pwm_chip", b.motor_pwm_chip, 0, 1023, "", "class/pwm/pwmchipN");
@@ -305,8 +322,16 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
-  if (static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= out.config.board.gauge_poll_us)
-    return fail("gauge.stale_ms", "must be longer than board.gauge.poll_us, or readings go stale between polls");
+  if (const auto gap = platform::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
+      static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= gap.count()) {
+    return fail(
+        "gauge.stale_ms",
+        fmt::format("{} ms does not outlast one missed poll: with these board.gauge timings a reading may be "
+                    "{:.1f} ms old (poll_us + 2 x timeout_us + {}); at least {} ms",
+                    l.gauge.stale_after, static_cast<double>(gap.count()) / 1000.0,
+                    out.config.board.gauge_transport == "rtu" ? "reconnect_backoff_ms" : "timeout_us for the reconnect",
+                    gap.count() / 1000 + 1));
+  }
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
   if (const auto problem = platform::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);

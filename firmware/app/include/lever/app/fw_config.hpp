@@ -9,10 +9,16 @@
 #include "lever/platform/board_can_port_config.hpp"
 #include "lever/platform/gpio_encoder_config.hpp"
 #include "lever/platform/modbus_gauge_config.hpp"
+#include "lever/platform/modbus_gauge_presets.hpp"
 #include "lever/platform/pwm_motor_config.hpp"
 #include "lever/platform/realtime_config.hpp"
 
 namespace lever::app {
+
+// The board's default amplifier: the common weighing-amplifier layout (platform::preset_gross_weight_int32:
+// the gross weight as a 32-bit integer in holding registers 0-1, high word first, in grams) on Modbus TCP,
+// with the platform's default timing and the testbed load cell's range as its saturation bounds.
+const platform::ModbusGaugeConfig& default_gauge();
 
 struct BoardConfig {
   std::string can_interface = "can0";
@@ -30,13 +36,13 @@ struct BoardConfig {
   std::string gauge_device = "/dev/ttyUSB0";
   std::int64_t gauge_baud = 115200, gauge_stop_bits = 1, gauge_slave_id = 1;
   platform::Parity gauge_parity = platform::Parity::none;
-  // Default: the common layout of a weighing amplifier, the gross weight as a 32-bit integer in holding
-  // registers 0-1, high word first, in grams (platform::preset_gross_weight_int32).
-  platform::GaugeRegisterMap gauge_registers{
-      platform::RegisterFunction::holding, 0,          platform::RegisterType::int32,
-      platform::WordOrder::high_first,     9.80665e-3, 0.0};
-  double gauge_saturation_raw_min = -1e15, gauge_saturation_raw_max = 1e15;
-  std::int64_t gauge_poll_us = 5000, gauge_timeout_us = 20000;
+  // Defaults: default_gauge()'s.
+  platform::GaugeRegisterMap gauge_registers = default_gauge().registers;
+  double gauge_saturation_raw_min = *default_gauge().registers.saturation_raw_min;
+  double gauge_saturation_raw_max = *default_gauge().registers.saturation_raw_max;
+  std::int64_t gauge_poll_us = default_gauge().poll_period.count();
+  std::int64_t gauge_timeout_us = default_gauge().response_timeout.count();
+  std::int64_t gauge_reconnect_backoff_ms = default_gauge().reconnect_backoff_initial.count();
 
   // The motor: a sysfs PWM channel and optional enable, direction and fault lines ("" : none).
   std::string motor_sysfs_root = "/sys";
@@ -65,7 +71,9 @@ platform::PwmMotorConfig motor_config(const BoardConfig& board);
 platform::RealtimeConfig realtime_config(const BoardConfig& board);
 
 // The core's defaults, but for a board: the Modbus gauge already reports newtons (its register map scales
-// the amplifier's units), so the core's own gauge calibration is the identity.
+// the amplifier's units), so the core's own gauge calibration is the identity, its saturation the load cell's
+// capacity in newtons, and its staleness window the default gauge's longest gap for one missed poll, plus a
+// tick.
 fw::LeverConfig board_lever_defaults();
 
 struct FwConfig {
