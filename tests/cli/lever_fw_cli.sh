@@ -102,6 +102,11 @@ for role in hsi top; do
   sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
   check "example $role.toml lists every key at its default" cmp -s "$work/defaults.$role" "$work/example.$role"
 done
+# The timing budget and its window are named values of the effective configuration (docs/firmware.md).
+"$fw" --config "$work/empty.toml" --check-config >"$work/timing"
+check "--check-config prints the timing budget" grep -qx 'fault_after_ms = 2 .*' "$work/timing"
+check "--check-config prints the budget's window" grep -q '^window_ms = 68 ' "$work/timing"
+check "--check-config prints the long-step threshold" grep -q '^long_step_us = 100 ' "$work/timing"
 "$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
 check "--role overrides the file" grep -q '^role = "top"' "$work/override"
 

@@ -174,8 +174,13 @@ ConfigSchema schema_for(FwConfig& config) {
   s.integer("homing.timeout_ms", h.timeout_ticks, 1, 600000, "ms", "give up after this long");
 
   s.number("timing.overrun_periods", l.timing.overrun_periods, 1.0, 100.0, "periods",
-           "a longer step interval is an overrun");
-  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms", "a longer step interval latches TIMING");
+           "a longer step interval is an overrun (counted)");
+  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms",
+            "a longer step interval latches TIMING; so does more than fault_after_ms - 1 lost in a window");
+  s.integer("timing.window_ms", l.timing.window, 1, fw::StepTiming::kMaxWindow, "ms",
+            "lost time (late intervals less a period, long steps) is summed over any window this long");
+  s.integer("timing.long_step_us", l.timing.long_step_us, 1, 1000000, "us",
+            "a step longer than this counts its whole duration as lost time");
 
   s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
   s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");

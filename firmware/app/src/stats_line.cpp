@@ -44,6 +44,8 @@ nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
       {"overruns", s.overruns},
       {"worst_step_interval_ms", s.worst_interval},
       {"worst_step_us", static_cast<double>(s.worst_step_ns) * 1e-3},
+      {"long_steps", s.long_steps},
+      {"worst_lost_in_window_us", s.worst_lost_us},
       {"wakeup_latency_us",
        {{"p50", optional(board.wakeup_p50_us)},
         {"p99", optional(board.wakeup_p99_us)},

@@ -29,7 +29,7 @@ struct Snapshot {
   double remote = 0.0;
   double torque_nm = 0.0;
   fw::LeverCounters counters{};
-  std::uint32_t overruns = 0;
+  std::uint32_t overruns = 0, long_steps = 0, worst_lost_us = 0;
   fw::Tick worst_interval = 0;
   std::uint64_t worst_step_ns = 0;
   std::uint64_t encoder_edges = 0;
@@ -70,6 +70,8 @@ Snapshot snapshot(const Lever& lever, fw::Tick now) noexcept {
   s.torque_nm = t.torque_nm;
   s.counters = lever.counters();
   s.overruns = lever.timing().stats().overruns;
+  s.long_steps = lever.timing().stats().long_steps;
+  s.worst_lost_us = lever.timing().stats().worst_lost_us;
   s.worst_interval = lever.timing().stats().worst_interval;
   s.worst_step_ns = lever.timing().stats().worst_step_ns;
   s.encoder_edges = lever.decoder().edges();
