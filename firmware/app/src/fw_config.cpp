@@ -108,6 +108,10 @@ platform::RealtimeConfig realtime_config(const BoardConfig& b) {
   return c;
 }
 
+platform::LoopWatchdogConfig watchdog_config(const BoardConfig& b) {
+  return {b.watchdog_device, std::chrono::seconds(b.watchdog_timeout_s)};
+}
+
 platform::BoardCanPortConfig can_config(const FwConfig& config) {
   platform::BoardCanPortConfig c;
   c.interface = config.board.can_interface;
@@ -295,6 +299,11 @@ ConfigSchema schema_for(FwConfig& config) {
   s.boolean("board.realtime.lock_memory", b.realtime_lock_memory, "mlockall, so no page fault stalls a step");
   s.integer("board.realtime.prefault_stack_kib", b.realtime_prefault_stack_kib, 0, 65536, "KiB",
             "stack touched at start");
+
+  s.text("board.watchdog.device", b.watchdog_device,
+         "a hardware watchdog fed only while the loop advances, e.g. /dev/watchdog0; empty: none");
+  s.integer("board.watchdog.timeout_s", b.watchdog_timeout_s, 1, 60, "s",
+            "the hardware watchdog resets the board after this long unfed");
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include "lever/fw/lever_config.hpp"
 #include "lever/platform/board_can_port_config.hpp"
 #include "lever/platform/gpio_encoder_config.hpp"
+#include "lever/platform/loop_watchdog.hpp"
 #include "lever/platform/modbus_gauge_config.hpp"
 #include "lever/platform/modbus_gauge_presets.hpp"
 #include "lever/platform/pwm_motor_config.hpp"
@@ -61,6 +62,11 @@ struct BoardConfig {
   std::int64_t realtime_prefault_stack_kib = 256;
 
   std::int64_t can_link_retry_ms = 50, can_link_retry_max_ms = 1000;
+
+  // A hardware watchdog fed only while the loop advances (platform::LoopWatchdog); empty: none. The service
+  // manager's watchdog needs no key: its interval is the unit's WatchdogSec= (lever-fw@.service).
+  std::string watchdog_device;
+  std::int64_t watchdog_timeout_s = 2;
 };
 
 // The libgpiod backend's configuration from the board's keys.
@@ -69,6 +75,7 @@ platform::GpioEncoderConfig encoder_config(const BoardConfig& board);
 platform::ModbusGaugeConfig gauge_config(const BoardConfig& board);
 platform::PwmMotorConfig motor_config(const BoardConfig& board);
 platform::RealtimeConfig realtime_config(const BoardConfig& board);
+platform::LoopWatchdogConfig watchdog_config(const BoardConfig& board);
 
 // The core's defaults, but for a board: the Modbus gauge already reports newtons (its register map scales
 // the amplifier's units), so the core's own gauge calibration is the identity, its saturation the load cell's
