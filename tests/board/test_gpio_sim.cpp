@@ -389,14 +389,18 @@ TEST_CASE("throughput: edges per second the reader holds with no loss", "[.throu
     for (int i = 0; i < repeat; ++i) runs.push_back(rate);
   for (const int rate : runs) {
     Session s(by_label_and_names());
-    const auto gen = s.generate({"rate=" + std::to_string(rate), "+" + std::to_string(edges)}, true);
+    const char* batch = std::getenv("LEVER_THROUGHPUT_BATCH");
+    const auto gen = s.generate(
+        {"rate=" + std::to_string(rate), std::string("batch=") + (batch ? batch : "1"), "+" + std::to_string(edges)},
+        true);
     s.settle();
     const auto& st = s.encoder().stats();
     std::printf(
-        "{\"asked_edges_per_s\": %d, \"achieved_edges_per_s\": %.0f, \"edges\": %llu, \"delivered\": %llu, "
+        "{\"asked_edges_per_s\": %d, \"batch\": %s, \"achieved_edges_per_s\": %.0f, \"edges\": %llu, \"delivered\": "
+        "%llu, "
         "\"count\": %lld, \"exact\": %s, \"lost\": %llu, \"fifo_full\": %llu, \"impossible\": %llu, "
         "\"reordered\": %llu, \"drains\": %llu}\n",
-        rate, gen.elapsed_s > 0 ? static_cast<double>(gen.edges) / gen.elapsed_s : 0.0,
+        rate, batch ? batch : "1", gen.elapsed_s > 0 ? static_cast<double>(gen.edges) / gen.elapsed_s : 0.0,
         static_cast<unsigned long long>(gen.edges), static_cast<unsigned long long>(st.edges),
         static_cast<long long>(s.decoder().count()),
         s.decoder().count() == gen.position && s.lost() == 0 ? "true" : "false",
