@@ -277,3 +277,38 @@ TEST_CASE("loop watchdog: a loop stuck in a step, or a stopped process, has its 
   CHECK(t.last_feed_after_ms <= 50.0 + 25.0);
   CHECK(t.stuck_to_kill_ms <= static_cast<double>((kWatchdogSec + 50ms).count()) + 25.0);
 }
+
+// Not run by ctest: it needs a watchdog device, and a mistake resets the machine. Run in the kernel rig's guest
+// with softdog loaded (docs/deploy.md, "The units"): LEVER_WATCHDOG_DEVICE=/dev/watchdog. A loop that advances
+// keeps the board up past the device's timeout; the deliberate stop's magic close disarms it. Set
+// LEVER_WATCHDOG_HANG=1 to see the other side: the loop stops advancing, and softdog resets the guest.
+TEST_CASE("loop watchdog: a hardware watchdog fed while the loop advances, disarmed by a clean stop",
+          "[.softdog][watchdog]") {
+  const char* device = std::getenv("LEVER_WATCHDOG_DEVICE");
+  REQUIRE(device != nullptr);
+  ::unsetenv("WATCHDOG_USEC");
+  auto opened = LoopWatchdog::open({device, std::chrono::seconds(1)});
+  REQUIRE(opened.ok());
+  LoopWatchdog& watchdog = opened.value();
+  std::printf("%s\n", watchdog.description().c_str());
+  CHECK(watchdog.check_interval() == 250ms);
+  const bool hang = std::getenv("LEVER_WATCHDOG_HANG") != nullptr;
+  std::uint64_t tick = 0;
+  for (const auto until = Clock::now() + 3s; Clock::now() < until;) {
+    watchdog.advanced(++tick);
+    std::this_thread::sleep_for(1ms);
+  }
+  CHECK(watchdog.feeds() >= 8);  // 3 s at one feed per 250 ms check, on a slow guest fewer
+  std::printf("fed %llu times in 3 s of an advancing loop; the guest is up past the 1 s timeout\n",
+              static_cast<unsigned long long>(watchdog.feeds()));
+  std::fflush(stdout);
+  if (hang) {
+    std::printf("the loop stops advancing now: softdog should reset the guest within 1 s\n");
+    std::fflush(stdout);
+    std::this_thread::sleep_for(5s);
+    FAIL("still running 5 s after the loop stopped advancing");
+  }
+  watchdog.stop();
+  std::this_thread::sleep_for(2s);  // past the timeout: a watchdog left armed would have reset the guest by now
+  std::printf("stopped cleanly; the guest is up 2 s after the magic close\n");
+}
