@@ -12,7 +12,7 @@ refuses() {  # refuses NAME ARGUMENT_NAMED COMMAND...
   check "$name: exit 2 (got $code)" test "$code" -eq 2
   check "$name: names '$named' (got: $(head -c 200 "$work/err"))" grep -qF -- "$named" "$work/err"
 }
-for script in build build-mcu rate-table hil-change-bounds-wall-tap hil-change-bounds-sphere-3dof demo test setup package \
+for script in check-skips build build-mcu rate-table hil-change-bounds-wall-tap hil-change-bounds-sphere-3dof demo test setup package \
   cross-build; do
   refuses "scripts/$script --frobnicate" "--frobnicate" "$root/scripts/$script" --frobnicate
 done
@@ -24,6 +24,7 @@ refuses "scripts/build-mcu with a second argument" "'extra'" "$root/scripts/buil
 refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
 refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
 refuses "scripts/demo with an argument" "'now'" "$root/scripts/demo" now
+refuses "scripts/test with an argument" "'now'" "$root/scripts/test" now
 refuses "fuzz/run-datagram-fuzzer --frobnicate" "--frobnicate" "$root/fuzz/run-datagram-fuzzer" --frobnicate
 refuses "tools/dbc-decode --frobnicate" "--frobnicate" "$root/tools/dbc-decode" --frobnicate x.dbc
 report "scripts"
