@@ -14,9 +14,12 @@ void HostConsole::step(fw::Tick tick, fw::Tick start, bool faults_hold, SimLever
 }
 
 // Home a lever whose position is unknown; once neither needs homing, re-arm the ones that are not armed, so that
-// the pair starts together.
+// the pair starts together. A lever in fault takes no home: the host acknowledges the fault with a disarm first
+// (docs/can-protocol.md, "What clears a fault").
 void HostConsole::manage(SimLevers& levers) {
   const bool hsi_home = levers.hsi().needs_homing(), top_home = levers.top().needs_homing();
+  send(protocol::Opcode::disarm, hsi_home && levers.hsi().state() == fw::LeverState::fault,
+       top_home && levers.top().state() == fw::LeverState::fault, levers);
   send(protocol::Opcode::home, hsi_home, top_home, levers);
   const bool homing = hsi_home || top_home || levers.hsi().state() == fw::LeverState::homing ||
                       levers.top().state() == fw::LeverState::homing;

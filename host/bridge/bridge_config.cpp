@@ -11,7 +11,9 @@
 #include <cmath>
 #include <cstring>
 
+#include "lever/platform/interface_name.hpp"
 #include "lever/platform/udp_socket.hpp"
+#include "lever/program/config_file.hpp"
 #include "shown_value.hpp"
 
 #define TOML_EXCEPTIONS 1
@@ -21,17 +23,6 @@ namespace lever::bridge {
 namespace {
 
 // Far beyond any real configuration (a few hundred bytes), and small enough to read whole.
-constexpr long long kMaxConfigBytes = 1 << 20;
-
-const char* file_kind(mode_t mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISLNK(mode)) return "a symbolic link";
-  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISSOCK(mode)) return "a socket";
-  return "a special file";
-}
-
 // A value from the file, as the user wrote it, cut short: it is echoed into a one-line message.
 std::string shown(const toml::node& node) {
   std::string text;
@@ -52,18 +43,11 @@ std::string shown(const toml::node& node) {
 }  // namespace
 
 void load_config_file(const std::filesystem::path& file, BridgeConfig& c) {
-  // toml++ reads a directory or a device as an empty file: a wrong path would pass for an empty configuration.
-  if (struct stat st{}; ::stat(file.c_str(), &st) != 0) {
-    throw std::invalid_argument(fmt::format("{}: cannot read: {}", file.string(), std::strerror(errno)));
-  } else if (!S_ISREG(st.st_mode)) {
-    throw std::invalid_argument(fmt::format("{}: {}, not a configuration file", file.string(), file_kind(st.st_mode)));
-  } else if (st.st_size > kMaxConfigBytes) {
-    throw std::invalid_argument(fmt::format("{}: {} bytes; a configuration file is at most {}", file.string(),
-                                            static_cast<long long>(st.st_size), kMaxConfigBytes));
-  }
+  const auto read = program::read_config_file(file.string());
+  if (!read.error.empty()) throw std::invalid_argument(read.error);
   toml::table t;
   try {
-    t = toml::parse_file(file.string());
+    t = toml::parse(read.text, file.string());
   } catch (const toml::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}:{}: {}", file.string(), e.source().begin.line, e.description()));
   }
@@ -219,7 +203,7 @@ void check_record_path(const std::filesystem::path& record, const std::filesyste
   if (::lstat(record.c_str(), &st) == 0) {
     if (!S_ISREG(st.st_mode)) {
       throw std::invalid_argument(fmt::format("record '{}': {}; the recording is a regular file of its own", shown_path,
-                                              file_kind(st.st_mode)));
+                                              program::file_kind(st.st_mode)));
     }
     struct stat key {};
     if (!key_file.empty() && ::stat(key_file.c_str(), &key) == 0 && key.st_dev == st.st_dev &&
@@ -245,16 +229,8 @@ void validate(const BridgeConfig& c) {
   for (const auto& [value, name] : {std::pair{&c.can_interface, "can"}, {&c.bind, "bind"}, {&c.peer, "peer"}}) {
     if (value->empty()) throw fail(fmt::format("--{0} (key '{0}') is required (see --help)", name));
   }
-  const auto bad_name = [](const std::string& n) {
-    return n.size() >= IFNAMSIZ || n == "." || n == ".." ||
-           n.find_first_of(std::string_view("/: \t\n\0", 6)) != std::string::npos ||
-           std::any_of(n.begin(), n.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7F; });
-  };
-  if (bad_name(c.can_interface)) {
-    throw fail(fmt::format(
-        "can '{}': not an interface name (at most {} characters, no '/', ':', spaces or control characters)",
-        cut(c.can_interface), IFNAMSIZ - 1));
-  }
+  if (const auto problem = platform::interface_name_problem(c.can_interface))
+    throw fail(fmt::format("can '{}': not an interface name: {}", cut(c.can_interface), *problem));
   std::string error;
   const auto bind = platform::parse_socket_address(c.bind, error);
   if (!bind) throw fail("bind " + cut(error, 200));

@@ -25,7 +25,11 @@ using namespace lever::bridge;
 constexpr int kBadInput = lever::program::kBadInput;
 constexpr int kRuntimeFailure = 1;
 
-int fail(int code, const std::string& message) {
+// Whatever a message echoes (an interface name may hold any byte the kernel allows), no control byte reaches the
+// terminal.
+int fail(int code, std::string message) {
+  for (auto& c : message)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '?';
   fmt::print(stderr, "lever-bridge: {}\n", message);
   return code;
 }

@@ -1,17 +1,14 @@
 #include "lever/platform/board_can_port_config.hpp"
 
-#include "lever/platform/socketcan.hpp"
+#include "lever/platform/interface_name.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::platform {
 
 std::vector<std::string> BoardCanPortConfig::validate() const {
   std::vector<std::string> problems;
-  if (interface.empty()) problems.emplace_back("interface: empty (a CAN interface such as can0)");
-  if (interface.size() > SocketCan::kMaxInterfaceName) {
-    problems.emplace_back("interface: \"" + interface + "\" is longer than the kernel's " +
-                          std::to_string(SocketCan::kMaxInterfaceName) + " characters");
-  }
+  if (const auto problem = interface_name_problem(interface))
+    problems.emplace_back("interface: \"" + interface + "\": " + *problem);
   if (pair >= protocol::kPairCount) {
     problems.emplace_back("pair: " + std::to_string(pair) + " is not a lever pair (0.." +
                           std::to_string(protocol::kPairCount - 1) + ")");

@@ -13,6 +13,7 @@
 #include <string>
 #include <system_error>
 #include <utility>
+#include <variant>
 
 #include "lever/platform/latest_value.hpp"
 #include "lever/platform/modbus_failure.hpp"
@@ -62,9 +63,12 @@ struct ModbusGauge::Shared {
   std::atomic<std::uint64_t> reconnects{0};
   std::atomic<bool> connected{false};
   std::atomic<int> last_errno{0};
+  std::atomic<std::int64_t> newest_failure_ns{0};  // CLOCK_MONOTONIC of the newest failed poll or connect
 
   // Poll thread only: the pacing and backoff state.
+  const bool tcp = std::holds_alternative<ModbusTcpEndpoint>(config.transport);
   std::chrono::milliseconds backoff{config.reconnect_backoff_initial};
+  bool waited_since_success = false;  // TCP reconnects at once after a success, and backs off from then on
   bool ever_connected = false;
   Clock::time_point next_poll{};
 
@@ -126,16 +130,16 @@ void ModbusGauge::Shared::poll_once() {
     if (failure == ModbusFailure::bad_crc) bump(crc_errors);
     if (failure == ModbusFailure::exception) bump(exceptions);
     if (needs_reconnect(failure)) {
-      // After a timeout a late answer may still come; on a fresh connection it cannot be mistaken for the next.
       modbus_close(context.get());
       connected.store(false, std::memory_order_relaxed);
     } else if (failure != ModbusFailure::exception) {
-      modbus_flush(context.get());  // the rest of a garbled frame must not become the start of the next
+      modbus_flush(context.get());  // the rest of a garbled or late frame must not become the start of the next
     }
     return;
   }
   // The device answered: whatever went wrong before is over.
   backoff = config.reconnect_backoff_initial;
+  waited_since_success = false;
   const std::optional<double> raw = decode_registers(
       std::span<const std::uint16_t>(words.data(), static_cast<std::size_t>(count)), map.type, map.word_order);
   if (!raw) {
@@ -155,9 +159,17 @@ void ModbusGauge::Shared::poll_once() {
 void ModbusGauge::Shared::record_failure(int errno_value) noexcept {
   bump(errors);
   last_errno.store(errno_value, std::memory_order_relaxed);
+  newest_failure_ns.store(monotonic_ns(), std::memory_order_release);
 }
 
 bool ModbusGauge::Shared::back_off(const std::stop_token& stop) {
+  // A TCP connection lost after good reads is reconnected at once: a missed poll costs only its timeout and a
+  // connect (longest_gap). The waits are for a server that stays away.
+  if (tcp && !waited_since_success) {
+    waited_since_success = true;
+    return !stop.stop_requested();
+  }
+  waited_since_success = true;
   const bool running = sleep_until(stop, Clock::now() + backoff);
   backoff = std::min(backoff * 2, config.reconnect_backoff_max);
   return running;
@@ -207,6 +219,10 @@ void ModbusGauge::stop() noexcept {
 }
 
 std::optional<GaugeSample> ModbusGauge::latest() const noexcept { return shared_->latest.load(); }
+
+std::int64_t ModbusGauge::newest_failure_ns() const noexcept {
+  return shared_->newest_failure_ns.load(std::memory_order_acquire);
+}
 
 GaugeCounters ModbusGauge::counters() const noexcept {
   const Shared& s = *shared_;

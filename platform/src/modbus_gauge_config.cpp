@@ -75,6 +75,15 @@ std::optional<std::string> check(const GaugeRegisterMap& map) {
   if (!std::isfinite(map.offset)) return "registers.offset: " + real(map.offset) + " must be finite";
   if (map.saturation_raw_min && std::isnan(*map.saturation_raw_min)) return "registers.saturation_raw_min: NaN";
   if (map.saturation_raw_max && std::isnan(*map.saturation_raw_max)) return "registers.saturation_raw_max: NaN";
+  // A bound the register cannot reach would never flag anything: the ±1e15 that once stood in the examples.
+  if (map.saturation_raw_min && *map.saturation_raw_min < lowest_value(map.type)) {
+    return "registers.saturation_raw_min: " + real(*map.saturation_raw_min) + " is below the lowest value of " +
+           "the register type (" + real(lowest_value(map.type)) + "): saturation would never be seen";
+  }
+  if (map.saturation_raw_max && *map.saturation_raw_max > highest_value(map.type)) {
+    return "registers.saturation_raw_max: " + real(*map.saturation_raw_max) + " is above the highest value of " +
+           "the register type (" + real(highest_value(map.type)) + "): saturation would never be seen";
+  }
   if (map.saturation_raw_min && map.saturation_raw_max && *map.saturation_raw_min >= *map.saturation_raw_max) {
     return "registers.saturation_raw_min: " + real(*map.saturation_raw_min) + " is not below saturation_raw_max " +
            real(*map.saturation_raw_max);
@@ -105,6 +114,44 @@ std::optional<std::string> check_timing(const ModbusGaugeConfig& config) {
 }
 
 }  // namespace
+
+double lowest_value(RegisterType type) noexcept {
+  switch (type) {
+    case RegisterType::int16:
+      return -32768.0;
+    case RegisterType::int32:
+      return -2147483648.0;
+    case RegisterType::float32:
+      return -3.4028234663852886e38;
+    case RegisterType::uint16:
+    case RegisterType::uint32:
+      break;
+  }
+  return 0.0;
+}
+
+double highest_value(RegisterType type) noexcept {
+  switch (type) {
+    case RegisterType::int16:
+      return 32767.0;
+    case RegisterType::uint16:
+      return 65535.0;
+    case RegisterType::int32:
+      return 2147483647.0;
+    case RegisterType::uint32:
+      return 4294967295.0;
+    case RegisterType::float32:
+      break;
+  }
+  return 3.4028234663852886e38;
+}
+
+std::chrono::microseconds longest_gap(const ModbusGaugeConfig& config, int missed_polls) {
+  const bool rtu = std::holds_alternative<ModbusRtuEndpoint>(config.transport);
+  const std::chrono::microseconds reconnect =
+      rtu ? std::chrono::microseconds(config.reconnect_backoff_initial) : config.response_timeout;
+  return config.poll_period + (missed_polls + 1) * config.response_timeout + missed_polls * reconnect;
+}
 
 int register_count(RegisterType type) noexcept {
   return type == RegisterType::int16 || type == RegisterType::uint16 ? 1 : 2;

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <utility>
 
+#include "lever/platform/interface_name.hpp"
+
 namespace lever::platform {
 
 static_assert(SocketCan::kMaxInterfaceName + 1 == IFNAMSIZ);
@@ -28,10 +30,8 @@ ifreq request_for(const std::array<char, SocketCan::kMaxInterfaceName + 1>& name
 
 Result<SocketCan> SocketCan::open(const SocketCanConfig& config) {
   const std::string& name = config.interface;
-  if (name.empty() || name.size() > kMaxInterfaceName || name.find('/') != std::string::npos ||
-      name.find('\0') != std::string::npos) {
-    return Error{"CAN interface \"" + name + "\": not a valid interface name", EINVAL};
-  }
+  if (const auto problem = interface_name_problem(name))
+    return Error{"CAN interface \"" + name + "\": not a valid interface name: " + *problem, EINVAL};
   if (config.filters.size() > kMaxFilters) {
     return Error{name + ": " + std::to_string(config.filters.size()) + " receive filters, at most " +
                      std::to_string(kMaxFilters),

@@ -20,7 +20,11 @@ Error os_error(int err, std::string message) { return Error{std::move(message) +
 
 bool exists(const std::string& path) { return ::access(path.c_str(), F_OK) == 0; }
 
-UniqueFd open_for_write(const std::string& path) { return UniqueFd(::open(path.c_str(), O_WRONLY | O_CLOEXEC)); }
+// Non-blocking: a FIFO where an attribute should be (a test tree, a wrong sysfs_root) must not hang the open;
+// pwrite on it then fails (ESPIPE) like any write that does not take.
+UniqueFd open_for_write(const std::string& path) {
+  return UniqueFd(::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC));
+}
 
 // The decimal an attribute holds (its first line: a test's regular file may keep the tail of a longer value).
 std::optional<std::uint64_t> read_decimal(int fd) {

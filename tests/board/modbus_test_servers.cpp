@@ -59,7 +59,15 @@ void ModbusTestServer::handle(modbus_t* context, const std::uint8_t* request, in
   received_.fetch_add(1);
   const ServerBehaviour behaviour = behaviour_.load();
   if (behaviour == ServerBehaviour::mute) return;
-  if (behaviour == ServerBehaviour::late) std::this_thread::sleep_for(kLateAnswerDelay);
+  for (int left = to_drop_.load(); left > 0;)
+    if (to_drop_.compare_exchange_weak(left, left - 1)) return;
+  if (behaviour == ServerBehaviour::late) std::this_thread::sleep_for(std::chrono::milliseconds(late_delay_ms_.load()));
+  for (int left = to_refuse_.load(); left > 0;) {
+    if (to_refuse_.compare_exchange_weak(left, left - 1)) {
+      modbus_reply_exception(context, request, MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+      return;
+    }
+  }
   std::lock_guard lock(mutex_);
   modbus_reply(context, request, length, mapping_.get());
 }

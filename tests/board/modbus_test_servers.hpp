@@ -20,7 +20,7 @@ namespace lever::test {
 enum class ServerBehaviour : std::uint8_t {
   answer,  // modbus_reply: the registers, or an exception for an address outside the mapping
   mute,    // read each request and never answer, as an amplifier that hangs
-  late,    // answer each request kLateAnswerDelay after it came, as an amplifier that stalls
+  late,    // answer each request late_delay() after it came (kLateAnswerDelay unless set), as an amplifier that stalls
 };
 inline constexpr std::chrono::milliseconds kLateAnswerDelay{80};
 
@@ -35,6 +35,14 @@ class ModbusTestServer {
   void set_holding(int address, std::span<const std::uint16_t> words);
   void set_input(int address, std::span<const std::uint16_t> words);
   void set_behaviour(ServerBehaviour behaviour) { behaviour_.store(behaviour); }
+  // The next `requests` requests are read and never answered (a response lost on the way), then the server
+  // behaves as set again.
+  void drop_next(int requests) { to_drop_.store(requests); }
+  int drops_left() const { return to_drop_.load(); }
+  // The next `requests` requests are answered with a Modbus exception (server busy).
+  void refuse_next(int requests) { to_refuse_.store(requests); }
+  int refusals_left() const { return to_refuse_.load(); }
+  void set_late_delay(std::chrono::milliseconds delay) { late_delay_ms_.store(delay.count()); }
   std::uint64_t requests_received() const { return received_.load(); }
 
  protected:
@@ -50,6 +58,9 @@ class ModbusTestServer {
   std::unique_ptr<modbus_mapping_t, MappingFree> mapping_;
   std::atomic<ServerBehaviour> behaviour_{ServerBehaviour::answer};
   std::atomic<std::uint64_t> received_{0};
+  std::atomic<int> to_drop_{0};
+  std::atomic<int> to_refuse_{0};
+  std::atomic<std::chrono::milliseconds::rep> late_delay_ms_{kLateAnswerDelay.count()};
 };
 
 // Modbus TCP on a loopback address. Destroying it closes the listening socket and the connection.

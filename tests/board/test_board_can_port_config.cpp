@@ -7,6 +7,7 @@
 #include <string>
 
 #include "lever/platform/board_can_port.hpp"
+#include "lever/platform/interface_name.hpp"
 #include "lever/protocol/messages.hpp"
 
 using lever::platform::BoardCanPort;
@@ -79,6 +80,27 @@ TEST_CASE("the port's config is checked field by field", "[board_can]") {
   const auto more = long_name.validate();
   CHECK(contains(more, "interface: \"can-much-too-long\""));
   CHECK(contains(more, "link_retry_max_ms: 10"));
+}
+
+TEST_CASE("interface names as the kernel takes them (dev_valid_name), and no '%'", "[board_can]") {
+  using lever::platform::interface_name_problem;
+  using namespace std::string_literals;
+  for (const std::string& good : {"can0"s, "vcan1"s, "fifteen-bytes-x"s, "..."s, ".can"s, "-x"s, "can\x01"s,
+                                  "c\xC3\xA4n0"s /* can with a-umlaut: C3 A4 */, "a,b=c"s}) {
+    INFO("'" << good << "'");
+    CHECK_FALSE(interface_name_problem(good).has_value());
+  }
+  for (const std::string& bad :
+       {""s, "sixteen-bytes-xx"s, "."s, ".."s, "a/b"s, "a:b"s, "a b"s, "a\tb"s, "a\nb"s, "a\vb"s, "a\fb"s, "a\rb"s,
+        "\xC3\xA0"s /* a-grave: C3 A0, 0xA0 is the kernel's space */, "can%d"s, "a\0b"s}) {
+    INFO("'" << bad << "'");
+    CHECK(interface_name_problem(bad).has_value());
+  }
+  CHECK(*interface_name_problem("a/b") == "contains '/', which the kernel refuses in an interface name");
+  CHECK(*interface_name_problem("a\tb") == "contains \\x09, which the kernel refuses in an interface name");
+  BoardCanPortConfig c;
+  c.interface = "can:0";
+  CHECK(contains(c.validate(), "interface: \"can:0\": contains ':'"));
 }
 
 TEST_CASE("a port that cannot be opened is an error naming the interface", "[board_can]") {

@@ -14,12 +14,15 @@
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "lever/fw/lever.hpp"
 #include "lever/platform/gpio_encoder.hpp"
 
 extern char** environ;
@@ -72,55 +75,65 @@ struct GenSummary {
   double elapsed_s = 0;
 };
 
+GpioEncoder open_or_fail(const GpioEncoderConfig& config) {
+  auto r = GpioEncoder::open(config);
+  if (!r.ok()) FAIL("open: " << r.error().message);
+  return std::move(r).value();
+}
+
+// Runs the generator with `steps` to its end. With `each_tick`, calls it every millisecond while the generator
+// runs (the firmware's tick); without, the reader is stalled for the whole run.
+GenSummary run_generator(const std::vector<std::string>& steps, const std::function<void()>& each_tick) {
+  const std::string summary_path =
+      std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/gpio-gen-summary.json";
+  std::vector<std::string> args{
+      env("LEVER_GPIO_GEN"), "--dir",     env("LEVER_GPIO_SYSFS"), "--a", "0", "--b", "1", "--z", "2",
+      "--summary",           summary_path};
+  args.insert(args.end(), steps.begin(), steps.end());
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  REQUIRE(::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+  int status = 0;
+  if (each_tick) {
+    timespec next{};
+    ::clock_gettime(CLOCK_MONOTONIC, &next);
+    for (;;) {
+      each_tick();
+      const pid_t done = ::waitpid(pid, &status, WNOHANG);
+      if (done < 0) FAIL("waitpid on the generator failed");
+      if (done == pid) break;
+      next.tv_nsec += 1'000'000;
+      if (next.tv_nsec >= 1'000'000'000) {
+        next.tv_nsec -= 1'000'000'000;
+        ++next.tv_sec;
+      }
+      ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    }
+  } else {
+    REQUIRE(::waitpid(pid, &status, 0) == pid);
+  }
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  std::ifstream in(summary_path);
+  const auto j = nlohmann::json::parse(in);
+  GenSummary s;
+  s.edges = j.at("edges");
+  s.position = j.at("position");
+  const std::string levels = j.at("levels");
+  s.levels = lever::fw::ab(levels[0] == '1', levels[1] == '1');
+  s.index_at = j.at("index_at").get<std::vector<std::int64_t>>();
+  s.elapsed_s = j.at("elapsed_s");
+  return s;
+}
+
 class Session {
  public:
   explicit Session(const GpioEncoderConfig& config) : encoder_(open_or_fail(config)), decoder_(encoder_.levels()) {}
 
-  // Runs the generator with `steps` to its end. With `drain_meanwhile`, drains every millisecond while it runs
-  // (the firmware's tick); without, the reader is stalled for the whole run.
   GenSummary generate(const std::vector<std::string>& steps, bool drain_meanwhile) {
-    const std::string summary_path =
-        std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/gpio-gen-summary.json";
-    std::vector<std::string> args{
-        env("LEVER_GPIO_GEN"), "--dir",     env("LEVER_GPIO_SYSFS"), "--a", "0", "--b", "1", "--z", "2",
-        "--summary",           summary_path};
-    args.insert(args.end(), steps.begin(), steps.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    REQUIRE(::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
-    int status = 0;
-    if (drain_meanwhile) {
-      timespec next{};
-      ::clock_gettime(CLOCK_MONOTONIC, &next);
-      for (;;) {
-        drain();
-        const pid_t done = ::waitpid(pid, &status, WNOHANG);
-        if (done < 0) FAIL("waitpid on the generator failed");
-        if (done == pid) break;
-        next.tv_nsec += 1'000'000;
-        if (next.tv_nsec >= 1'000'000'000) {
-          next.tv_nsec -= 1'000'000'000;
-          ++next.tv_sec;
-        }
-        ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
-      }
-    } else {
-      REQUIRE(::waitpid(pid, &status, 0) == pid);
-    }
-    REQUIRE(WIFEXITED(status));
-    REQUIRE(WEXITSTATUS(status) == 0);
-    std::ifstream in(summary_path);
-    const auto j = nlohmann::json::parse(in);
-    GenSummary s;
-    s.edges = j.at("edges");
-    s.position = j.at("position");
-    const std::string levels = j.at("levels");
-    s.levels = lever::fw::ab(levels[0] == '1', levels[1] == '1');
-    s.index_at = j.at("index_at").get<std::vector<std::int64_t>>();
-    s.elapsed_s = j.at("elapsed_s");
-    return s;
+    return run_generator(steps, drain_meanwhile ? std::function<void()>([this] { drain(); }) : nullptr);
   }
 
   void drain() {
@@ -173,12 +186,6 @@ class Session {
   }
 
  private:
-  static GpioEncoder open_or_fail(const GpioEncoderConfig& config) {
-    auto r = GpioEncoder::open(config);
-    if (!r.ok()) FAIL("open: " << r.error().message);
-    return std::move(r).value();
-  }
-
   GpioEncoder encoder_;
   Decoder decoder_;
   std::uint64_t lost_ = 0;
@@ -327,4 +334,79 @@ TEST_CASE("a line that is busy, missing or on no chip gives an error naming it, 
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message.find("busy") != std::string::npos);
   CHECK(r.error().message.find("lever-gpio-sim-test") != std::string::npos);
+}
+
+namespace {
+
+// The firmware core as a board runs it, on this encoder, with nothing else attached: what it counts is what a
+// lever would.
+struct NoForce {
+  std::optional<lever::fw::ForceReading> latest() const { return std::nullopt; }
+};
+struct NoMotor {
+  void command(const lever::fw::MotorCommand&) {}
+  bool driver_fault() const { return false; }
+};
+struct NoCan {
+  bool receive(lever::protocol::CanFrame&) { return false; }
+  bool send(const lever::protocol::CanFrame&) { return true; }
+};
+using CoreHal = lever::fw::Ports<GpioEncoder, NoForce, NoMotor, NoCan>;
+
+}  // namespace
+
+TEST_CASE("the firmware core on this encoder counts every edge, the first one too: 4000 forward, 1500 back") {
+  CoreHal hal{open_or_fail(by_label_and_names()), {}, {}, {}};
+  lever::fw::HsiLever<CoreHal> lever(hal, lever::fw::LeverConfig{});
+  lever::fw::Tick now = 1;
+  const auto step = [&] { lever.step(now++); };
+  const auto gen = run_generator({"rate=2000", "+4000", "-1500"}, step);
+  for (int i = 0; i < 50; ++i) {  // stragglers and the last level check
+    timespec ms{0, 1'000'000};
+    ::nanosleep(&ms, nullptr);
+    step();
+  }
+  REQUIRE(gen.position == 2500);
+  CHECK(lever.decoder().lost_edges() == 0u);
+  CHECK(lever.decoder().illegal_transitions() == 0u);
+  CHECK(lever.decoder().counts() == 2500);
+}
+
+// Not a test: what rate the libgpiod path holds without loss, reader at 1 kHz as the firmware's loop. Run by
+// hand in the guest (docs/board-encoder.md, "Throughput"); prints one JSON line per rate.
+TEST_CASE("throughput: edges per second the reader holds with no loss", "[.throughput]") {
+  const char* rates_env = std::getenv("LEVER_THROUGHPUT_RATES");
+  std::vector<int> rates{2000, 4000, 8000, 12000, 16000, 24000, 32000, 48000};
+  if (rates_env != nullptr && *rates_env != '\0') {
+    rates.clear();
+    std::istringstream in(rates_env);
+    for (std::string item; std::getline(in, item, ',');) rates.push_back(std::stoi(item));
+  }
+  const int edges = std::getenv("LEVER_THROUGHPUT_EDGES") ? std::atoi(std::getenv("LEVER_THROUGHPUT_EDGES")) : 8000;
+  const int repeat = std::getenv("LEVER_THROUGHPUT_REPEAT") ? std::atoi(std::getenv("LEVER_THROUGHPUT_REPEAT")) : 1;
+  std::vector<int> runs;
+  for (const int rate : rates)
+    for (int i = 0; i < repeat; ++i) runs.push_back(rate);
+  for (const int rate : runs) {
+    Session s(by_label_and_names());
+    const char* batch = std::getenv("LEVER_THROUGHPUT_BATCH");
+    const auto gen = s.generate(
+        {"rate=" + std::to_string(rate), std::string("batch=") + (batch ? batch : "1"), "+" + std::to_string(edges)},
+        true);
+    s.settle();
+    const auto& st = s.encoder().stats();
+    std::printf(
+        "{\"asked_edges_per_s\": %d, \"batch\": %s, \"achieved_edges_per_s\": %.0f, \"edges\": %llu, \"delivered\": "
+        "%llu, "
+        "\"count\": %lld, \"exact\": %s, \"lost\": %llu, \"fifo_full\": %llu, \"impossible\": %llu, "
+        "\"reordered\": %llu, \"drains\": %llu}\n",
+        rate, batch ? batch : "1", gen.elapsed_s > 0 ? static_cast<double>(gen.edges) / gen.elapsed_s : 0.0,
+        static_cast<unsigned long long>(gen.edges), static_cast<unsigned long long>(st.edges),
+        static_cast<long long>(s.decoder().count()),
+        s.decoder().count() == gen.position && s.lost() == 0 ? "true" : "false",
+        static_cast<unsigned long long>(s.lost()), static_cast<unsigned long long>(st.fifo_full),
+        static_cast<unsigned long long>(st.impossible), static_cast<unsigned long long>(st.reordered),
+        static_cast<unsigned long long>(s.drains()));
+    std::fflush(stdout);
+  }
 }

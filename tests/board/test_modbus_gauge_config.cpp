@@ -51,9 +51,19 @@ TEST_CASE("the defaults are valid, over TCP and over RTU, with the documented va
   CHECK(problem(config).empty());
   CHECK(problem(rtu_config()).empty());
   CHECK(config.poll_period == 5ms);
-  CHECK(config.response_timeout == 20ms);
-  CHECK(config.reconnect_backoff_initial == 50ms);
+  CHECK(config.response_timeout == 10ms);
+  CHECK(config.reconnect_backoff_initial == 10ms);
   CHECK(config.reconnect_backoff_max == 2s);
+}
+
+TEST_CASE("the longest gap between readings: a period, a timeout per missed poll and the answer's, RTU's quiet wait") {
+  ModbusGaugeConfig tcp;
+  CHECK(longest_gap(tcp, 0) == 15ms);  // 5 + 10: no poll missed, the answer at the last moment
+  CHECK(longest_gap(tcp, 1) == 35ms);  // + a timeout and a connect bounded by it
+  CHECK(longest_gap(tcp, 3) == 75ms);
+  auto rtu = rtu_config();
+  rtu.reconnect_backoff_initial = 30ms;
+  CHECK(longest_gap(rtu, 1) == 55ms);  // + a timeout and the 30 ms a late answer gets to land on a closed port
 }
 
 TEST_CASE("both presets are valid and read the documented registers") {
@@ -64,6 +74,9 @@ TEST_CASE("both presets are valid and read the documented registers") {
   CHECK(weight.registers.type == RegisterType::int32);
   CHECK(weight.registers.word_order == WordOrder::high_first);
   CHECK(weight.registers.scale == Approx(9.80665e-3));
+  // The testbed's 50 N load cell in grams: the amplifier's maximum output, whole counts.
+  CHECK(*weight.registers.saturation_raw_max == 5098.0);
+  CHECK(*weight.registers.saturation_raw_min == -5098.0);
 
   const auto force = preset_force_float32(ModbusRtuEndpoint{}, 2.0);
   CHECK(problem(force).empty());
@@ -72,6 +85,32 @@ TEST_CASE("both presets are valid and read the documented registers") {
   CHECK(force.registers.type == RegisterType::float32);
   CHECK(force.registers.scale == 2.0);
   CHECK(force.poll_period == 5ms);
+  CHECK(*force.registers.saturation_raw_max == 25.0);  // 50 N at 2 N per unit
+  CHECK(*force.registers.saturation_raw_min == -25.0);
+  CHECK(*preset_force_float32(ModbusTcpEndpoint{}).registers.saturation_raw_max == 50.0);
+  CHECK(*preset_gross_weight_int32(ModbusTcpEndpoint{}, 0.01, 200.0).registers.saturation_raw_max == 20000.0);
+}
+
+TEST_CASE("a saturation bound the register type cannot reach is refused: it would never flag anything") {
+  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) {
+               m.type = RegisterType::int32;
+               m.saturation_raw_max = 1e15;
+             }),
+             StartsWith("registers.saturation_raw_max: 1e+15 is above the highest value"));
+  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) { m.saturation_raw_min = -40000; }),  // int16
+             StartsWith("registers.saturation_raw_min: -40000 is below the lowest value"));
+  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) {
+               m.type = RegisterType::uint16;
+               m.saturation_raw_max = 65536;
+             }),
+             StartsWith("registers.saturation_raw_max:"));
+  // The ends themselves are reachable.
+  CHECK(problem_with_map([](GaugeRegisterMap& m) { m.saturation_raw_min = -32768; }).empty());
+  CHECK(problem_with_map([](GaugeRegisterMap& m) {
+          m.type = RegisterType::uint16;
+          m.saturation_raw_min = 0;
+          m.saturation_raw_max = 65535;
+        }).empty());
 }
 
 TEST_CASE("TCP endpoint problems name their field") {

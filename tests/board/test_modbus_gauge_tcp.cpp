@@ -9,6 +9,7 @@
 
 #include "gauge_test_support.hpp"
 #include "gauge_type_cases.hpp"
+#include "lever/platform/modbus_gauge_presets.hpp"
 #include "modbus_test_servers.hpp"
 
 using namespace lever::platform;
@@ -103,6 +104,37 @@ TEST_CASE(
   CHECK(counters.connected);
   CHECK(counters.exceptions == 0);
   CHECK(counters.crc_errors == 0);
+}
+
+TEST_CASE("TCP: an answer that comes after its timeout is never taken for the next request's, and reading resumes") {
+  TcpTestServer server;
+  hold_int32(server, 1);
+  auto config = test_config(loopback(server.port()), int32_at_zero());
+  config.response_timeout = 50ms;
+  auto opened = ModbusGauge::open(config);
+  REQUIRE(opened.ok());
+  const ModbusGauge& gauge = opened.value();
+  REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == 1; }));
+
+  // Every answer now comes 80 ms after its request, carrying 2: after its request's timeout. On the same
+  // connection it would arrive while the next request waits, and every answer after it would be one late.
+  hold_int32(server, 2);
+  server.set_behaviour(ServerBehaviour::late);
+  const auto frozen_sequence = gauge.latest()->sequence + 1;  // one answer may still have been on time
+  bool late_value_taken = false;
+  REQUIRE(eventually(
+      [&] {
+        late_value_taken = late_value_taken || gauge.latest()->sequence > frozen_sequence;
+        return gauge.counters().timeouts >= 3;
+      },
+      3s));
+  CHECK_FALSE(late_value_taken);
+  // A new connection after each timeout (the newest may still be on its way): the late answer dies with the old.
+  CHECK(gauge.counters().reconnects + 1 >= gauge.counters().timeouts);
+
+  hold_int32(server, 3);
+  server.set_behaviour(ServerBehaviour::answer);
+  REQUIRE(eventually([&] { return gauge.latest()->raw == 3; }));
 }
 
 TEST_CASE("TCP: a server that goes away and comes back on the same port is reconnected") {
@@ -239,6 +271,43 @@ TEST_CASE("TCP: a reading at or beyond a saturation bound is flagged") {
   reads(-29999, false);
   reads(-32768, true);
   reads(0, false);
+}
+
+TEST_CASE("TCP: each preset flags the amplifier's range end, the load cell's capacity, as saturated") {
+  TcpTestServer server;
+  SECTION("int32 gross weight in grams: +-5098 g is 50 N") {
+    auto config = preset_gross_weight_int32(loopback(server.port()));
+    config.response_timeout = 1s;
+    auto opened = ModbusGauge::open(config);
+    REQUIRE(opened.ok());
+    const ModbusGauge& gauge = opened.value();
+    auto reads = [&](double raw, bool saturated) {
+      server.set_holding(0, registers_for(raw, RegisterType::int32, WordOrder::high_first));
+      REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == raw; }));
+      CHECK(gauge.latest()->saturated == saturated);
+    };
+    reads(5097, false);
+    reads(5098, true);
+    reads(-5097, false);
+    reads(-5098, true);
+    reads(20000, true);
+  }
+  SECTION("float32 force in newtons: +-50 N") {
+    auto config = preset_force_float32(loopback(server.port()));
+    config.response_timeout = 1s;
+    auto opened = ModbusGauge::open(config);
+    REQUIRE(opened.ok());
+    const ModbusGauge& gauge = opened.value();
+    auto reads = [&](double raw, bool saturated) {
+      server.set_input(0, registers_for(raw, RegisterType::float32, WordOrder::high_first));
+      REQUIRE(eventually([&] { return gauge.latest() && gauge.latest()->raw == raw; }));
+      CHECK(gauge.latest()->saturated == saturated);
+    };
+    reads(49.5, false);
+    reads(50.0, true);
+    reads(-49.5, false);
+    reads(-50.0, true);
+  }
 }
 
 TEST_CASE("TCP: the destructor ends at once between reads and within a response timeout during one") {

@@ -153,7 +153,7 @@ TEST_CASE("PeriodTracker: the ticks it serves show the core's step timing the ga
   serve(4 * kMs + 100 * kUs);  // tick 3 missed: an interval of 2 ticks, an overrun
   CHECK(timing.stats().overruns == 1);
   CHECK_FALSE(timing.violated());
-  serve(11 * kMs + 1 * kUs);  // ticks 5 to 10 missed: an interval of 7 ticks, past the 5-tick bound
+  serve(11 * kMs + 1 * kUs);  // ticks 5 to 10 missed: an interval of 7 ticks, past the 2-tick bound
   CHECK(timing.violated());
   CHECK(timing.stats().worst_interval == 7);
   CHECK(timing.stats().clock_faults == 0);

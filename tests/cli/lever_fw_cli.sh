@@ -25,6 +25,7 @@ check "--help documents the exit codes" grep -q "2 bad input" "$work/help"
 check "--version names the program" grep -q "lever-fw" "$work/version"
 "$fw" >/dev/null 2>"$work/err"; check "no --config: exit 2" test $? -eq 2
 
+: >"$work/empty.toml"
 bad_config "unknown key" "codec.motion.q: unknown key" $'[codec.motion]\nq = 0.1'
 bad_config "unknown section" "sensor.x: unknown key" $'[sensor]\nx = 1'
 bad_config "wrong type" "lever.pair: must be a whole number in [0, 15], got a string" $'[lever]\npair = "one"'
@@ -36,11 +37,50 @@ bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, inde
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
 bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
 bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
-bad_config "a gauge staler than its polls" "gauge.stale_ms: must be longer than board.gauge.poll_us" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
+bad_config "a gauge staler than its polls" "gauge.stale_ms: 5 ms does not outlast one missed poll" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
+# The gauge's timings as a relation: one missed poll costs a response timeout, RTU's a backoff more.
+bad_config "a stale window one missed poll reaches" \
+  "a reading may be 35.0 ms old (poll_us + 2 x timeout_us + timeout_us for the reconnect); at least 36 ms" \
+  $'[gauge]\nstale_ms = 35'
+bad_config "a longer timeout alone" "a reading may be 65.0 ms old" $'[board.gauge]\ntimeout_us = 20000'
+bad_config "RTU with a longer backoff" "(poll_us + 2 x timeout_us + reconnect_backoff_ms); at least 76 ms" \
+  $'[board.gauge]\ntransport = "rtu"\nreconnect_backoff_ms = 50'
+printf '[gauge]\nstale_ms = 76\n[board.gauge]\ntransport = "rtu"\nreconnect_backoff_ms = 50\n' >"$work/rtu.toml"
+"$fw" --config "$work/rtu.toml" --check-config >/dev/null 2>"$work/err"
+check "RTU with a window that outlasts one missed poll: valid ($(cat "$work/err"))" test $? -eq 0
+bad_config "a saturation bound the register never reaches" "saturation would never be seen" \
+  $'[board.gauge]\nsaturation_raw_max = 1e15'
 bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]\nfilter_hz = 800'
 "$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
 check "missing file: exit 2" test "$code" -eq 2
 check "missing file: says why" grep -q "missing.toml: cannot read: No such file" "$work/err"
+
+# A configuration given as any kind of file: only a regular file is read, and nothing hangs.
+mkdir "$work/adir"; mkfifo "$work/afifo"
+head -c $((1024 * 1024 + 1)) /dev/zero | tr '\0' '#' >"$work/huge.toml"
+for kind in "$work/adir:a directory, not a configuration file" "$work/afifo:a FIFO, not a configuration file" \
+  "/dev/null:a device, not a configuration file" "$work/huge.toml:1048577 bytes; a configuration file is at most 1048576"; do
+  path=${kind%%:*} says=${kind#*:}
+  timeout 10 "$fw" --config "$path" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "config $path: exit 2, at once (got $code)" test "$code" -eq 2
+  check "config $path: says '$says' (got: $(cat "$work/err"))" grep -qF -- "$path: $says" "$work/err"
+  check "config $path: prints no configuration" test ! -s "$work/out"
+done
+bad_config "an integer too large for TOML" "bad.toml:2:" $'[link]\ncomms_timeout_ms = 99999999999999999999999'
+bad_config "a huge number" "link.comms_timeout_ms: must be a whole number in [1, 60000], got 1e+300" $'[link]\ncomms_timeout_ms = 1e300'
+bad_config "a huge string" "board.can: interface" "$(printf '[board.can]\ninterface = "%s"' "$(head -c 100000 /dev/zero | tr '\0' a)")"
+# Interface names as the kernel takes them, in the file and on the command line alike.
+for name in "can/0" "can:0" "can 0" "." ".." "can%d" "sixteen-bytes-xx" ""; do
+  bad_config "interface name '$name'" "board.can: interface" "$(printf '[board.can]\ninterface = "%s"' "$name")"
+  "$fw" --config "$work/empty.toml" --can "$name" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "--can '$name': exit 2 like the same name in the file (got $code)" test "$code" -eq 2
+  check "--can '$name': names the option (got: $(cat "$work/err"))" grep -qF -- "--can: board.can.interface" "$work/err"
+done
+for name in "can0" "fifteen-bytes-x" "..." "vcan-ä"; do
+  "$fw" --config "$work/empty.toml" --can "$name" --check-config >"$work/out" 2>"$work/err"; code=$?
+  check "--can '$name', a name the kernel allows: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+  check "--can '$name' is the effective interface" grep -qF -e "interface = '$name'" -e "interface = \"$name\"" "$work/out"
+done
 
 "$fw" --config "$examples/top-float32.toml" --check-config >"$work/f32"; code=$?
 check "example top-float32.toml is valid" test "$code" -eq 0
@@ -57,12 +97,16 @@ for role in hsi top; do
   check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
 done
 # The examples are every key at its default: they cannot drift from the program.
-: >"$work/empty.toml"
 for role in hsi top; do
   "$fw" --config "$work/empty.toml" --role "$role" --check-config | sed 1d >"$work/defaults.$role"
   sed '/^#/d' "$examples/$role.toml" | sed '1{/^$/d}' >"$work/example.$role"
   check "example $role.toml lists every key at its default" cmp -s "$work/defaults.$role" "$work/example.$role"
 done
+# The timing budget and its window are named values of the effective configuration (docs/firmware.md).
+"$fw" --config "$work/empty.toml" --check-config >"$work/timing"
+check "--check-config prints the timing budget" grep -qx 'fault_after_ms = 2 .*' "$work/timing"
+check "--check-config prints the budget's window" grep -q '^window_ms = 68 ' "$work/timing"
+check "--check-config prints the long-step threshold" grep -q '^long_step_us = 100 ' "$work/timing"
 "$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
 check "--role overrides the file" grep -q '^role = "top"' "$work/override"
 
@@ -83,6 +127,27 @@ timeout 20 "$fw" --config "$work/motor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
 check "--motor-off: the PWM is disabled" test "$(head -n1 "$pwm/pwm0/enable")" = 0
 check "--motor-off: at duty 0" test "$(head -n1 "$pwm/pwm0/duty_cycle")" = 0
+# Bounded in time whatever is under its sysfs root: FIFOs, directories and loops where attributes belong.
+for case in fifo-enable fifo-export dir-duty loop-period; do
+  root=$work/sys-$case chip=$work/sys-$case/class/pwm/pwmchip0
+  mkdir -p "$chip/pwm0"
+  for f in enable duty_cycle period polarity; do printf '0\n' >"$chip/pwm0/$f"; done
+  : >"$chip/export"
+  case $case in
+    fifo-enable) rm "$chip/pwm0/enable"; mkfifo "$chip/pwm0/enable" ;;
+    fifo-export) rm -r "$chip/pwm0" "$chip/export"; mkfifo "$chip/export" ;;
+    dir-duty) rm "$chip/pwm0/duty_cycle"; mkdir "$chip/pwm0/duty_cycle" ;;
+    loop-period) rm "$chip/pwm0/period"; ln -s period "$chip/pwm0/period" ;;
+  esac
+  printf '[board.motor]\nsysfs_root = "%s"\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n' "$root" >"$work/m.toml"
+  start=$(date +%s%N)
+  timeout 20 "$fw" --config "$work/m.toml" --motor-off 2>"$work/err"; code=$?
+  elapsed_ms=$((($(date +%s%N) - start) / 1000000))
+  check "--motor-off on $case: exit 1 (got $code: $(cat "$work/err"))" test "$code" -eq 1
+  check "--motor-off on $case: done within 3 s (export_timeout_ms 1000 and a few writes; took $elapsed_ms ms)" \
+    test "$elapsed_ms" -lt 3000
+  check "--motor-off on $case: names the file" grep -q "motor-off: cannot open the motor: motor PWM: .*$root" "$work/err"
+done
 printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.toml"
 timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1

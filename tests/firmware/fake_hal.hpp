@@ -73,10 +73,13 @@ struct FakeEncoder {
 struct FakeEdgeEncoder {
   std::vector<EncoderEdge> pending;
   std::uint32_t lost = 0;
+  AbState current = 0;  // the levels after the newest edge delivered; at start, where the lines are
   void push(AbState levels, bool index = false) { pending.push_back({levels, index}); }
+  AbState levels() const { return current; }
   EdgeDrain drain_edges(EncoderEdge* out, std::size_t capacity) {
     const std::size_t n = pending.size() < capacity ? pending.size() : capacity;
     for (std::size_t i = 0; i < n; ++i) out[i] = pending[i];
+    if (n > 0) current = pending[n - 1].levels;
     pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(n));
     EdgeDrain d{n, 0};
     if (pending.empty()) d.lost = std::exchange(lost, 0u);

@@ -93,7 +93,10 @@ TEST_CASE("supervisor: homing starts only without torque and without active faul
   CHECK_FALSE(s.arm(0));  // no arming while homing
   s.report(bit(Fault::encoder), 3);
   CHECK(s.state() == LeverState::fault);
-  CHECK(s.home(0));  // from fault, homing may start again; the latch stays for the re-arm to clear
+  CHECK_FALSE(s.home(0));  // not straight out of fault: the host disarms first
+  CHECK(s.state() == LeverState::fault);
+  REQUIRE(s.disarm());
+  CHECK(s.home(0));  // from disarmed, homing may start again; the latch stays for the re-arm to clear
   CHECK(has(s.latched(), Fault::encoder));
   s.homing_done();
   CHECK(s.state() == LeverState::disarmed);

@@ -144,6 +144,34 @@ TEST_CASE("every fault kind latches, makes the lever safe in one tick, and re-ar
   }
 }
 
+TEST_CASE(
+    "the decoder starts from the levels the edge source read at open: the first edge counts, B leading A "
+    "counts up",
+    "[firmware][lever][encoder]") {
+  constexpr AbState kForward[4] = {0b00, 0b01, 0b11, 0b10};  // (A << 1) | B: B rises first
+  for (int start = 0; start < 4; ++start) {
+    INFO("lines at " << kForward[start] << " when opened");
+    test::CanBus bus;
+    test::FakeHal<test::FakeEdgeEncoder> hal(bus);
+    hal.encoder_.current = kForward[start];
+    HsiLever<test::FakeHal<test::FakeEdgeEncoder>> hsi(hal, test::rig_config(protocol::Role::hsi));
+    Tick now = 1;
+    // 4000 steps forward, one per tick edge by edge, then 1500 back: as the guest's quadrature source drives them.
+    int phase = start;
+    for (int i = 0; i < 4000; ++i) {
+      hal.encoder_.push(kForward[++phase % 4]);
+      hsi.step(now++);
+    }
+    CHECK(hsi.decoder().counts() == 4000);
+    for (int i = 0; i < 1500; ++i) {
+      hal.encoder_.push(kForward[(--phase % 4 + 4) % 4]);
+      hsi.step(now++);
+    }
+    CHECK(hsi.decoder().counts() == 2500);
+    CHECK(hsi.decoder().illegal_transitions() == 0u);
+  }
+}
+
 TEST_CASE("an encoder glitch storm latches ENCODER and the TOP lets go rather than hold blind",
           "[firmware][lever][encoder]") {
   test::CanBus bus;
@@ -434,12 +462,49 @@ TEST_CASE("lost edges latch ENCODER, invalidate the position, and only homing ma
   rig.tick();
   CHECK(rig.top.supervisor().state() == LeverState::fault);  // the count is off: no re-arm before homing
   rig.command(Opcode::home);
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::fault);  // nor a home straight out of fault
+  rig.command(Opcode::disarm);  // the host acknowledges the fault: the TOP stops its safe behaviour...
+  rig.command(Opcode::home);    // ...and may then home, its faults still latched
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::homing);
+  CHECK(has(rig.top.supervisor().latched(), Fault::encoder));
   for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
   CHECK(rig.top.telemetry().position_valid);
   rig.tick();
   rig.command(Opcode::rearm);
   rig.tick();
   CHECK(rig.top.supervisor().armed());
+}
+
+TEST_CASE("a latched fault clears only by re-arm: a home meant for another lever leaves a faulted one in fault",
+          "[firmware][lever][homing][supervisor]") {
+  HomingRig rig;
+  for (int i = 0; i < 60; ++i) rig.tick();
+  rig.command(Opcode::home);
+  for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
+  rig.tick();
+  rig.command(Opcode::arm);
+  rig.tick();
+  REQUIRE(rig.top.supervisor().armed());
+  rig.hal.motor_.fault = true;  // the driver reports a fault, then recovers
+  rig.tick();
+  REQUIRE(rig.top.supervisor().state() == LeverState::fault);
+  rig.hal.motor_.fault = false;
+  const auto rejected = rig.top.counters().commands_rejected;
+  // lever_restart.sh: the host homes a restarted peer with a command to both levers.
+  rig.command(Opcode::home);
+  for (int i = 0; i < 100; ++i) rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::fault);
+  CHECK(rig.top.counters().commands_rejected == rejected + 1);
+  CHECK(has(rig.top.supervisor().latched(), Fault::motor_driver));
+  rig.command(Opcode::arm);  // arm does not clear either
+  rig.tick();
+  CHECK(rig.top.supervisor().state() == LeverState::fault);
+  rig.command(Opcode::rearm);  // the one command that clears
+  rig.tick();
+  CHECK(rig.top.supervisor().armed());
+  CHECK(rig.top.supervisor().latched() == 0);
 }
 
 TEST_CASE("a 16-bit hardware counter behind the counting port is unwrapped, not taken as the count",

@@ -206,6 +206,14 @@ TEST_CASE("a failed transfer is no sample: neither its value nor its time is tak
   g.update(ForceReading{5000, 21, true}, 21);
   CHECK_FALSE(g.update(ForceReading{5000, 22, true}, 22).has_value());
   CHECK(g.state().stale);
+  // Each failure is counted once, by its tick, however many ticks it is the newest thing the source has.
+  CHECK(g.state().failed_readings == 3u);
+  g.update(ForceReading{5000, 22, true}, 23);
+  g.update(ForceReading{5000, 22, true}, 24);
+  CHECK(g.state().failed_readings == 3u);
+  g.update(ForceReading{100, 25, false}, 25);
+  CHECK(g.state().failed_readings == 3u);
+  CHECK_FALSE(g.state().stale);
 }
 
 TEST_CASE("codes at the ADC's limits are saturated", "[firmware][gauge]") {

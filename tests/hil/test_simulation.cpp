@@ -199,15 +199,15 @@ TEST_CASE("fault specs are parsed or rejected with a reason", "[hil][faults]") {
   CHECK_THROWS_WITH(parse_fault_spec("delay-step@1"), Catch::Contains("needs :MILLISECONDS"));
 }
 
-TEST_CASE("late ticks: counted as overruns, TIMING exactly past the 5 ms bound, no velocity blow-up",
+TEST_CASE("late ticks: counted as overruns, TIMING exactly past the 2 ms bound, no velocity blow-up",
           "[hil][faults][timing]") {
   struct Case {
     const char* spec;
     bool timing_fault;
   };
   // The firmware is not stepped for D; its next step comes D + 1 ms after the last.
-  for (const Case k : {Case{"tick-late@3+0.004:top", false}, Case{"tick-late@3+0.005:top", true},
-                       Case{"tick-late@3+0.004:hsi", false}, Case{"tick-late@3+0.005:hsi", true}}) {
+  for (const Case k : {Case{"tick-late@3+0.001:top", false}, Case{"tick-late@3+0.002:top", true},
+                       Case{"tick-late@3+0.001:hsi", false}, Case{"tick-late@3+0.002:hsi", true}}) {
     SECTION(k.spec) {
       SimConfig c = base(5.0);
       c.faults.push_back(parse_fault_spec(k.spec));

@@ -14,10 +14,12 @@
 #include "lever/platform/board_can_port.hpp"
 #include "lever/platform/gpio_encoder.hpp"
 #include "lever/platform/latest_value.hpp"
+#include "lever/platform/loop_watchdog.hpp"
 #include "lever/platform/modbus_gauge.hpp"
 #include "lever/platform/motor_stop_signals.hpp"
 #include "lever/platform/pwm_motor.hpp"
 #include "lever/platform/realtime_loop.hpp"
+#include "lever/program/text.hpp"
 
 namespace lever::app {
 namespace {
@@ -45,7 +47,7 @@ long thread_minor_faults() noexcept {
 template <typename T>
 std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
   if (!r) {
-    fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, r.error().message);
+    fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, program::printable(r.error().message, 400));
     return std::nullopt;
   }
   return std::move(r).value();
@@ -54,20 +56,20 @@ std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
 template <typename Role>
 int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::ModbusGauge>& gauge, bool json_lines,
               const std::atomic<bool>& stop_flag) {
-  auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
-  if (!loop_result) {
-    fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);
+  // The watchdog's thread and the printer start before the loop raises this thread to SCHED_FIFO with
+  // SCHED_RESET_ON_FORK: started after, they would run SCHED_OTHER; started now they keep the service's own
+  // scheduling (FIFO 50 in lever-fw@.service), below the loop, ahead of ordinary load.
+  auto watchdog = platform::LoopWatchdog::open(watchdog_config(config.board));
+  if (!watchdog) {
+    fmt::print(stderr, "lever-fw: {}\n", program::printable(watchdog.error().message, 400));
     return kRuntimeFailure;
   }
-  auto& loop = loop_result.value();
-  if (!loop.privileged()) fmt::print(stderr, "lever-fw: warning: {}\n", loop.warning());
-  fw::Lever<BoardHal, Role> lever(hal, config.lever);
+  fmt::print(stderr, "lever-fw: {}\n", watchdog.value().description());
 
   // The loop publishes a snapshot every 100 ms; this thread prints one a second, so the loop never formats,
   // allocates or writes to a pipe that might block.
   platform::LatestValue<Snapshot> latest;
   platform::LatestValue<LoopSample> loop_sample;
-  std::stop_source stop;
   std::jthread printer([&](std::stop_token token) {
     while (!token.stop_requested()) {
       for (int i = 0; i < 10 && !token.stop_requested(); ++i)
@@ -89,6 +91,8 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         b.modbus_polls = c.polls;
         b.modbus_errors = c.errors;
         b.modbus_timeouts = c.timeouts;
+        b.modbus_crc_errors = c.crc_errors;
+        b.modbus_exceptions = c.exceptions;
         b.modbus_reconnects = c.reconnects;
       }
       const auto line = stats_json(*s, b);
@@ -102,6 +106,17 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
       std::fflush(stdout);
     }
   });
+
+  auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
+  if (!loop_result) {
+    fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);
+    return kRuntimeFailure;
+  }
+  auto& loop = loop_result.value();
+  if (!loop.privileged()) fmt::print(stderr, "lever-fw: warning: {}\n", loop.warning());
+  fw::Lever<BoardHal, Role> lever(hal, config.lever);
+
+  std::stop_source stop;
   long faults_at_start = -1;
   loop.run(
       [&](fw::Tick now) {
@@ -109,6 +124,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         hal.force_.now_tick = now;
         hal.force_.now_ns = platform::monotonic_ns();
         lever.step(now);
+        watchdog.value().advanced(now);  // after the step: only a step that ended feeds the watchdogs
         if (now % 100 == 0) latest.publish(snapshot(lever, now));
         if (now % 1000 == 0) {  // once a second: a histogram walk and one system call
           const long faults = thread_minor_faults();
@@ -124,6 +140,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
       stop.get_token());
   printer.request_stop();
   hal.motor_.command({0.0, false});  // the safe state before the objects go (their destructors stop it again)
+  watchdog.value().stop();
   fmt::print(stderr, "lever-fw: stopped; motor at zero torque and disabled\n");
   return 0;
 }

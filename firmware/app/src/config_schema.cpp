@@ -2,12 +2,10 @@
 
 #include <fmt/format.h>
 
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 
+#include "lever/program/config_file.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/text.hpp"
 
@@ -151,11 +149,17 @@ std::optional<std::string> ConfigSchema::load_string(std::string_view text, cons
 }
 
 std::optional<std::string> ConfigSchema::load_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fmt::format("{}: cannot read: {}", path, std::strerror(errno));
-  std::ostringstream content;
-  content << in.rdbuf();
-  return load_string(content.str(), path);
+  const auto file = program::read_config_file(path);
+  if (!file.error.empty()) return file.error;
+  return load_string(file.text, path);
+}
+
+std::optional<std::string> ConfigSchema::load_value(const std::string& key, const toml::node& value,
+                                                    const std::string& source) {
+  const auto it = index_.find(key);
+  if (it == index_.end()) return fmt::format("{}: {}: unknown key", source, printable(key));
+  if (auto e = fields_[it->second].load(value)) return fmt::format("{}: {}: {}", source, key, *e);
+  return std::nullopt;
 }
 
 std::string ConfigSchema::print() const {

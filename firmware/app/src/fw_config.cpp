@@ -2,8 +2,13 @@
 
 #include <fmt/format.h>
 
+#include "lever/program/text.hpp"
+
 namespace lever::app {
 namespace {
+
+// Polls in a row that may fail without the force going stale (docs/modbus-gauge.md, "Timing").
+constexpr int kMissedPollsTolerated = 1;
 
 using codec::Mode;
 using fw::Tick;
@@ -19,12 +24,21 @@ void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<doubl
 
 }  // namespace
 
+const platform::ModbusGaugeConfig& default_gauge() {
+  static const platform::ModbusGaugeConfig gauge = platform::preset_gross_weight_int32(platform::ModbusTcpEndpoint{});
+  return gauge;
+}
+
 fw::LeverConfig board_lever_defaults() {
   fw::LeverConfig c;
   c.gauge.newton_per_count = 1.0;
-  // A reading is as old as the poll period (5 ms) plus the response (up to the 20 ms timeout): the core's
-  // 5 ms, right for an amplifier that pushes 600 samples a second, would call every other Modbus reading stale.
-  c.gauge.stale_after = 25;
+  c.gauge.raw_min = -platform::kTestbedLoadCellCapacityN;
+  c.gauge.raw_max = platform::kTestbedLoadCellCapacityN;
+  // The core's 5 ms suits an amplifier that pushes 600 samples a second; polled over Modbus, a reading may be
+  // as old as the longest gap with one missed poll (5 + 3 x 10 ms), and one missed poll must not latch
+  // FORCE_STALE.
+  const auto gap = platform::longest_gap(default_gauge(), kMissedPollsTolerated);
+  c.gauge.stale_after = static_cast<fw::Tick>((gap.count() + 999) / 1000 + 1);
   return c;
 }
 
@@ -57,6 +71,8 @@ platform::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
   c.registers.saturation_raw_max = b.gauge_saturation_raw_max;
   c.poll_period = std::chrono::microseconds(b.gauge_poll_us);
   c.response_timeout = std::chrono::microseconds(b.gauge_timeout_us);
+  c.reconnect_backoff_initial = std::chrono::milliseconds(b.gauge_reconnect_backoff_ms);
+  if (c.reconnect_backoff_max < c.reconnect_backoff_initial) c.reconnect_backoff_max = c.reconnect_backoff_initial;
   return c;
 }
 
@@ -90,6 +106,10 @@ platform::RealtimeConfig realtime_config(const BoardConfig& b) {
   c.lock_memory = b.realtime_lock_memory;
   c.prefault_stack_bytes = static_cast<std::size_t>(b.realtime_prefault_stack_kib) * 1024;
   return c;
+}
+
+platform::LoopWatchdogConfig watchdog_config(const BoardConfig& b) {
+  return {b.watchdog_device, std::chrono::seconds(b.watchdog_timeout_s)};
 }
 
 platform::BoardCanPortConfig can_config(const FwConfig& config) {
@@ -158,8 +178,13 @@ ConfigSchema schema_for(FwConfig& config) {
   s.integer("homing.timeout_ms", h.timeout_ticks, 1, 600000, "ms", "give up after this long");
 
   s.number("timing.overrun_periods", l.timing.overrun_periods, 1.0, 100.0, "periods",
-           "a longer step interval is an overrun");
-  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms", "a longer step interval latches TIMING");
+           "a longer step interval is an overrun (counted)");
+  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms",
+            "a longer step interval latches TIMING; so does more than fault_after_ms - 1 lost in a window");
+  s.integer("timing.window_ms", l.timing.window, 1, fw::StepTiming::kMaxWindow, "ms",
+            "lost time (late intervals less a period, long steps) is summed over any window this long");
+  s.integer("timing.long_step_us", l.timing.long_step_us, 1, 1000000, "us",
+            "a step longer than this counts its whole duration as lost time");
 
   s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
   s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");
@@ -244,7 +269,10 @@ ConfigSchema schema_for(FwConfig& config) {
   s.number("board.gauge.saturation_raw_max", b.gauge_saturation_raw_max, -1e15, 1e15, "raw",
            "a raw value at or above is the amplifier's range end");
   s.integer("board.gauge.poll_us", b.gauge_poll_us, 100, 10000000, "us", "poll period (RTU at 115200 baud: 5-10 ms)");
-  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us", "response timeout");
+  s.integer("board.gauge.timeout_us", b.gauge_timeout_us, 1000, 1000000, "us",
+            "response timeout (a TCP connect's too); gauge.stale_ms must outlast one missed poll");
+  s.integer("board.gauge.reconnect_backoff_ms", b.gauge_reconnect_backoff_ms, 1, 60000, "ms",
+            "wait before a reconnect, doubled while it fails (TCP's first is at once; RTU's lets a late answer land)");
 
   s.text("board.motor.sysfs_root", b.motor_sysfs_root, "where sysfs is (tests: a tree of their own)");
   s.integer("board.motor.pwm_chip", b.motor_pwm_chip, 0, 1023, "", "class/pwm/pwmchipN");
@@ -271,20 +299,32 @@ ConfigSchema schema_for(FwConfig& config) {
   s.boolean("board.realtime.lock_memory", b.realtime_lock_memory, "mlockall, so no page fault stalls a step");
   s.integer("board.realtime.prefault_stack_kib", b.realtime_prefault_stack_kib, 0, 65536, "KiB",
             "stack touched at start");
+
+  s.text("board.watchdog.device", b.watchdog_device,
+         "a hardware watchdog fed only while the loop advances, e.g. /dev/watchdog0; empty: none");
+  s.integer("board.watchdog.timeout_s", b.watchdog_timeout_s, 1, 60, "s",
+            "the hardware watchdog resets the board after this long unfed");
   return s;
 }
 
-LoadedConfig load_fw_config(const std::string& path) {
+LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides) {
   LoadedConfig out;
   auto schema = schema_for(out.config);
   if (auto e = schema.load_file(path)) {
     out.error = *e;
     return out;
   }
+  if (overrides.role) out.config.lever.role = *overrides.role;
+  if (overrides.can) {
+    if (auto e = schema.load_value("board.can.interface", toml::value<std::string>(*overrides.can), "--can")) {
+      out.error = *e;
+      return out;
+    }
+  }
   // What one key cannot say alone.
   const auto& l = out.config.lever;
   auto fail = [&](std::string_view keys, std::string_view problem) {
-    out.error = fmt::format("{}: {}: {}", path, keys, problem);
+    out.error = fmt::format("{}: {}: {}", path, keys, program::printable(problem, 400));
     return out;
   };
   if (!(l.position_min_rad < l.position_max_rad))
@@ -296,8 +336,16 @@ LoadedConfig load_fw_config(const std::string& path) {
   if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
-  if (static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= out.config.board.gauge_poll_us)
-    return fail("gauge.stale_ms", "must be longer than board.gauge.poll_us, or readings go stale between polls");
+  if (const auto gap = platform::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
+      static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= gap.count()) {
+    return fail(
+        "gauge.stale_ms",
+        fmt::format("{} ms does not outlast one missed poll: with these board.gauge timings a reading may be "
+                    "{:.1f} ms old (poll_us + 2 x timeout_us + {}); at least {} ms",
+                    l.gauge.stale_after, static_cast<double>(gap.count()) / 1000.0,
+                    out.config.board.gauge_transport == "rtu" ? "reconnect_backoff_ms" : "timeout_us for the reconnect",
+                    gap.count() / 1000 + 1));
+  }
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
   if (const auto problem = platform::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
@@ -305,7 +353,11 @@ LoadedConfig load_fw_config(const std::string& path) {
   if (!out.config.board.realtime_cpus.empty() && !platform::parse_cpu_list(out.config.board.realtime_cpus))
     return fail("board.realtime.cpus", "not a CPU list like \"2\" or \"0,2-3\"");
   if (const auto p = realtime_config(out.config.board).validate(); !p.empty()) return fail("board.realtime", p.front());
-  if (const auto p = can_config(out.config).validate(); !p.empty()) return fail("board.can", p.front());
+  if (const auto p = can_config(out.config).validate(); !p.empty()) {
+    if (!overrides.can) return fail("board.can", p.front());
+    out.error = fmt::format("--can: board.can.{}", program::printable(p.front(), 400));
+    return out;
+  }
   if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
   return out;
 }

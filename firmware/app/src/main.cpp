@@ -46,14 +46,14 @@ int main(int argc, char** argv) {
       ->excludes("--check-config");
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
-  auto loaded = app::load_fw_config(config_path);
+  std::optional<std::string> can_override;
+  if (app.count("--can") > 0) can_override = can;
+  auto loaded = app::load_fw_config(config_path, {role, can_override});
   if (!loaded.error.empty()) {
     fmt::print(stderr, "lever-fw: {}\n", loaded.error);
     return kBadInput;
   }
   auto& config = loaded.config;
-  if (role) config.lever.role = *role;
-  if (!can.empty()) config.board.can_interface = can;
   if (check_config) {
     fmt::print("# lever-fw: {} is valid; the effective configuration:\n{}", config_path,
                app::schema_for(config).print());

@@ -9,6 +9,7 @@ namespace lever::fw::freestanding {
 
 struct EdgeEncoder {
   EdgeDrain drain_edges(EncoderEdge*, std::size_t) { return {}; }
+  AbState levels() const { return 0; }
 };
 struct CountingEncoder {
   std::uint32_t read_counts() { return 0; }

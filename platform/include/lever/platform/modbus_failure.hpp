@@ -14,7 +14,11 @@ enum class ModbusFailure : std::uint8_t {
 
 ModbusFailure classify_modbus_errno(int errno_value) noexcept;
 
-// Whether the connection must be closed and reopened after this failure.
+// Whether the connection must be closed and reopened after this failure. After a timeout a late answer may
+// still come: on TCP it would arrive while the next request waits, be refused for its transaction id
+// (EMBBADDATA), and every answer after it would then be one request late, for good (seen in the test of a
+// late server); a fresh connection cannot carry it. On RTU the port is reopened after a wait, so that the late
+// answer lands while it is closed.
 constexpr bool needs_reconnect(ModbusFailure failure) noexcept {
   return failure == ModbusFailure::timeout || failure == ModbusFailure::link;
 }

@@ -55,6 +55,11 @@ class ModbusGauge {
   // loop calls it every tick. Safe from any thread.
   std::optional<GaugeSample> latest() const noexcept;
 
+  // CLOCK_MONOTONIC when the newest failed poll or connect attempt ended; 0 before the first. A failure newer
+  // than latest()'s sample means the newest attempt failed: the board runner hands it to the core as a
+  // ForceReading with `error` set. Never blocks; safe from any thread.
+  std::int64_t newest_failure_ns() const noexcept;
+
   // A snapshot for logs and tests; each field is exact, the set is not taken atomically.
   GaugeCounters counters() const noexcept;
 

@@ -64,13 +64,31 @@ struct ModbusGaugeConfig {
   // One read request per period (default 5 ms: up to 200 reads/s); 100 us..10 s.
   std::chrono::microseconds poll_period{5'000};
   // How long a whole response may take, first byte to last; 1 ms..1 s. It also bounds how long the gauge's
-  // destructor can wait for a read in progress.
-  std::chrono::microseconds response_timeout{20'000};
-  // After a lost connection: wait, reconnect, and double the wait up to the maximum while it keeps failing.
-  // A successful read resets it. Initial 1 ms..max; max up to 60 s.
-  std::chrono::milliseconds reconnect_backoff_initial{50};
+  // destructor can wait for a read in progress, and a TCP connect. 10 ms: an RTU exchange at 115200 baud
+  // takes 1.5 ms on the wire, a LAN well under 1 ms; the rest is the amplifier's.
+  std::chrono::microseconds response_timeout{10'000};
+  // After a failure that costs the connection (a timeout, a lost link): reconnect, waiting this long first,
+  // doubled while it keeps failing up to the maximum; a successful read resets it. TCP's first reconnect after
+  // a good read is at once (a new connection cannot carry a late answer; the wait is for a server that stays
+  // away); RTU's first reopen waits, so that an answer later than the timeout lands while the port is closed
+  // and is flushed, never taken for the next request's. Initial 1 ms..max; max up to 60 s.
+  std::chrono::milliseconds reconnect_backoff_initial{10};
   std::chrono::milliseconds reconnect_backoff_max{2'000};
 };
+
+// The longest time between two readings when `missed_polls` polls in a row fail and the next one answers:
+// a poll begins at most a period after the reading before it; each failed attempt ends within the response
+// timeout (a timeout; a reset or refused connection fails sooner), and is followed by the reconnect: on TCP a
+// connect at once, which libmodbus bounds by the response timeout; on RTU a wait of reconnect_backoff_initial
+// and a reopen of the port; the answer comes within the response timeout:
+//   poll_period + (missed_polls + 1) x response_timeout + missed_polls x reconnect
+//   reconnect = response_timeout (TCP) or reconnect_backoff_initial (RTU)
+// A staleness window longer than this outlasts `missed_polls` failed polls (docs/modbus-gauge.md, "Timing").
+std::chrono::microseconds longest_gap(const ModbusGaugeConfig& config, int missed_polls);
+
+// The register types' value ranges, as decode_registers() returns them.
+double lowest_value(RegisterType type) noexcept;
+double highest_value(RegisterType type) noexcept;
 
 // Registers one value of `type` occupies (1 or 2).
 int register_count(RegisterType type) noexcept;

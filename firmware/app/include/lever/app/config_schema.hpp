@@ -66,6 +66,9 @@ class ConfigSchema {
   // problem may already be set: load into a scratch configuration and keep it only on success.
   std::optional<std::string> load_file(const std::string& path);
   std::optional<std::string> load_string(std::string_view text, const std::string& source_name);
+  // One key's value from elsewhere (a command-line option), through the same check as in a file. Returns
+  // "SOURCE: KEY: problem" on a problem.
+  std::optional<std::string> load_value(const std::string& key, const toml::node& value, const std::string& source);
 
   // The effective configuration as a TOML document, every key with its unit and documentation.
   std::string print() const;

@@ -1,17 +1,25 @@
 #pragma once
 // Everything lever-fw is configured with: the firmware core's LeverConfig and the board's backends, as one
 // TOML file whose keys carry their units (docs/lever-fw.md lists them with defaults).
+#include <optional>
 #include <string>
 
 #include "lever/app/config_schema.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/platform/board_can_port_config.hpp"
 #include "lever/platform/gpio_encoder_config.hpp"
+#include "lever/platform/loop_watchdog.hpp"
 #include "lever/platform/modbus_gauge_config.hpp"
+#include "lever/platform/modbus_gauge_presets.hpp"
 #include "lever/platform/pwm_motor_config.hpp"
 #include "lever/platform/realtime_config.hpp"
 
 namespace lever::app {
+
+// The board's default amplifier: the common weighing-amplifier layout (platform::preset_gross_weight_int32:
+// the gross weight as a 32-bit integer in holding registers 0-1, high word first, in grams) on Modbus TCP,
+// with the platform's default timing and the testbed load cell's range as its saturation bounds.
+const platform::ModbusGaugeConfig& default_gauge();
 
 struct BoardConfig {
   std::string can_interface = "can0";
@@ -29,13 +37,13 @@ struct BoardConfig {
   std::string gauge_device = "/dev/ttyUSB0";
   std::int64_t gauge_baud = 115200, gauge_stop_bits = 1, gauge_slave_id = 1;
   platform::Parity gauge_parity = platform::Parity::none;
-  // Default: the common layout of a weighing amplifier, the gross weight as a 32-bit integer in holding
-  // registers 0-1, high word first, in grams (platform::preset_gross_weight_int32).
-  platform::GaugeRegisterMap gauge_registers{
-      platform::RegisterFunction::holding, 0,          platform::RegisterType::int32,
-      platform::WordOrder::high_first,     9.80665e-3, 0.0};
-  double gauge_saturation_raw_min = -1e15, gauge_saturation_raw_max = 1e15;
-  std::int64_t gauge_poll_us = 5000, gauge_timeout_us = 20000;
+  // Defaults: default_gauge()'s.
+  platform::GaugeRegisterMap gauge_registers = default_gauge().registers;
+  double gauge_saturation_raw_min = *default_gauge().registers.saturation_raw_min;
+  double gauge_saturation_raw_max = *default_gauge().registers.saturation_raw_max;
+  std::int64_t gauge_poll_us = default_gauge().poll_period.count();
+  std::int64_t gauge_timeout_us = default_gauge().response_timeout.count();
+  std::int64_t gauge_reconnect_backoff_ms = default_gauge().reconnect_backoff_initial.count();
 
   // The motor: a sysfs PWM channel and optional enable, direction and fault lines ("" : none).
   std::string motor_sysfs_root = "/sys";
@@ -54,6 +62,11 @@ struct BoardConfig {
   std::int64_t realtime_prefault_stack_kib = 256;
 
   std::int64_t can_link_retry_ms = 50, can_link_retry_max_ms = 1000;
+
+  // A hardware watchdog fed only while the loop advances (platform::LoopWatchdog); empty: none. The service
+  // manager's watchdog needs no key: its interval is the unit's WatchdogSec= (lever-fw@.service).
+  std::string watchdog_device;
+  std::int64_t watchdog_timeout_s = 2;
 };
 
 // The libgpiod backend's configuration from the board's keys.
@@ -62,9 +75,12 @@ platform::GpioEncoderConfig encoder_config(const BoardConfig& board);
 platform::ModbusGaugeConfig gauge_config(const BoardConfig& board);
 platform::PwmMotorConfig motor_config(const BoardConfig& board);
 platform::RealtimeConfig realtime_config(const BoardConfig& board);
+platform::LoopWatchdogConfig watchdog_config(const BoardConfig& board);
 
 // The core's defaults, but for a board: the Modbus gauge already reports newtons (its register map scales
-// the amplifier's units), so the core's own gauge calibration is the identity.
+// the amplifier's units), so the core's own gauge calibration is the identity, its saturation the load cell's
+// capacity in newtons, and its staleness window the default gauge's longest gap for one missed poll, plus a
+// tick.
 fw::LeverConfig board_lever_defaults();
 
 struct FwConfig {
@@ -77,11 +93,19 @@ platform::BoardCanPortConfig can_config(const FwConfig& config);
 // The schema of a FwConfig: every key, bound to `config`'s fields.
 ConfigSchema schema_for(FwConfig& config);
 
-// Loads `path` over the defaults. On failure: the message naming file, key and problem.
+// The command line's overrides: applied over the file before anything is validated, each through the same
+// check as its key in the file, so that an override cannot pass what the file could not.
+struct ConfigOverrides {
+  std::optional<protocol::Role> role;  // --role: lever.role
+  std::optional<std::string> can;      // --can: board.can.interface
+};
+
+// Loads `path` over the defaults, then the overrides. On failure: the message naming file, key and problem
+// (or the option, for a problem an override brought).
 struct LoadedConfig {
   FwConfig config;
   std::string error;  // empty on success
 };
-LoadedConfig load_fw_config(const std::string& path);
+LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides = {});
 
 }  // namespace lever::app

@@ -24,11 +24,12 @@ struct Snapshot {
   double force_n = 0.0;
   bool has_force_age = false;
   fw::Tick force_age_ms = 0;
+  std::uint32_t force_failed_readings = 0;
   bool has_remote = false;
   double remote = 0.0;
   double torque_nm = 0.0;
   fw::LeverCounters counters{};
-  std::uint32_t overruns = 0;
+  std::uint32_t overruns = 0, long_steps = 0, worst_lost_us = 0;
   fw::Tick worst_interval = 0;
   std::uint64_t worst_step_ns = 0;
   std::uint64_t encoder_edges = 0;
@@ -42,7 +43,8 @@ struct BoardStats {
   std::optional<double> wakeup_p50_us, wakeup_p99_us, wakeup_max_us;
   std::optional<double> step_p50_us, step_p99_us, step_max_us;  // wake-up to the step's end
   std::optional<std::uint64_t> minor_faults;
-  std::optional<std::uint64_t> modbus_polls, modbus_errors, modbus_timeouts, modbus_reconnects;
+  std::optional<std::uint64_t> modbus_polls, modbus_errors, modbus_timeouts, modbus_crc_errors, modbus_exceptions,
+      modbus_reconnects;
 };
 
 template <typename Lever>
@@ -62,11 +64,14 @@ Snapshot snapshot(const Lever& lever, fw::Tick now) noexcept {
   s.force_n = t.force_n.value_or(0.0);
   s.has_force_age = gauge.seen && now >= gauge.last_tick;
   s.force_age_ms = s.has_force_age ? now - gauge.last_tick : 0;
+  s.force_failed_readings = gauge.failed_readings;
   s.has_remote = t.remote.has_value();
   s.remote = t.remote.value_or(0.0);
   s.torque_nm = t.torque_nm;
   s.counters = lever.counters();
   s.overruns = lever.timing().stats().overruns;
+  s.long_steps = lever.timing().stats().long_steps;
+  s.worst_lost_us = lever.timing().stats().worst_lost_us;
   s.worst_interval = lever.timing().stats().worst_interval;
   s.worst_step_ns = lever.timing().stats().worst_step_ns;
   s.encoder_edges = lever.decoder().edges();

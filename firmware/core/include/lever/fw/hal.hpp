@@ -36,10 +36,13 @@ struct EdgeDrain {
 };
 
 // Encoder as edge events (libgpiod on the board, the simulated encoder in the HIL): oldest first, up to
-// `capacity` at a time, never blocking.
+// `capacity` at a time, never blocking. levels(): the A/B levels after the newest edge delivered, and before
+// the first drain the levels the lines had when they were opened. An edge only says where the lines went, so
+// a decoder that waited for the first edge to learn where they were would lose that edge's count.
 template <typename E>
-concept EdgeEncoderPort = requires(E& e, EncoderEdge* out, std::size_t capacity) {
+concept EdgeEncoderPort = requires(E& e, const E& ce, EncoderEdge* out, std::size_t capacity) {
   { e.drain_edges(out, capacity) } -> std::same_as<EdgeDrain>;
+  { ce.levels() } -> std::same_as<AbState>;
 };
 
 // Encoder with a hardware counter (a timer in encoder mode, a kernel counter device): the raw register,

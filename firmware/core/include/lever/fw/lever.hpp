@@ -43,7 +43,10 @@ class Lever {
         homing_(config.homing),
         timing_(config.timing),
         role_(config),
-        uses_gauge_(Role::uses_gauge(config)) {}
+        uses_gauge_(Role::uses_gauge(config)) {
+    // The decoder starts where the lines are, so the first edge counts like every other one.
+    if constexpr (EdgeEncoderPort<EncoderOf<H>>) decoder_.reset(hal.encoder().levels());
+  }
 
   void step(Tick now) noexcept {
     std::uint64_t started_ns = 0;
@@ -254,8 +257,7 @@ class Lever {
         break;
       }
       case protocol::Opcode::home:
-        if (homing_.needed() &&
-            (supervisor_.state() == LeverState::disarmed || supervisor_.state() == LeverState::fault)) {
+        if (homing_.needed() && supervisor_.state() == LeverState::disarmed) {
           clear_encoder_fault();
           position_.invalidate();  // whatever the count said, homing is what makes it mean something
         }

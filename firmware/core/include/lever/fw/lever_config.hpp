@@ -80,7 +80,8 @@ constexpr bool is_valid(const LeverConfig& c) noexcept {
          c.counter_bits >= 8 && c.counter_bits <= 32 && c.torque_limit_nm > 0 && c.safe_hold_torque_nm >= 0 &&
          c.safe_hold_torque_nm <= c.torque_limit_nm && c.position_min_rad < c.position_max_rad &&
          c.gauge.stale_after > 0 && c.gauge.tare_samples > 0 && c.timing.overrun_periods >= 1.0 &&
-         c.timing.fault_after >= 1 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
+         c.timing.fault_after >= 1 && c.timing.window >= 1 && c.timing.window <= StepTiming::kMaxWindow &&
+         c.timing.long_step_us > 0 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
          h.torque_limit_nm > 0 && h.torque_limit_nm <= c.torque_limit_nm && h.stall_ticks > 0 &&
          std::isfinite(h.home_position_rad) && h.max_travel_rad > 0 && is_valid(c.passivity) &&
          c.display.lever_arm_m > 0;

@@ -23,7 +23,8 @@ class QuadratureDecoder {
     primed_ = true;
   }
 
-  // One observed level change. Gray-code order 00 -> 01 -> 11 -> 10 -> 00 counts up.
+  // One observed level change. Gray-code order 00 -> 01 -> 11 -> 10 -> 00 in (A, B) counts up: B leads A
+  // (B rises while A is low). Before reset() the first edge only sets the state, so start with reset().
   constexpr void feed(AbState levels) noexcept {
     levels &= 3u;
     ++edges_;

@@ -29,6 +29,11 @@ class StrainGauge {
     double offset_counts = 0.0;
     std::uint16_t tare_left = 0;
     double tare_sum = 0.0;
+    // Readings the source marked failed (ForceReading::error: a Modbus timeout, CRC error, exception...),
+    // counted once per failure by its tick. They never refresh the force: staleness tells when it is gone.
+    std::uint32_t failed_readings = 0;
+    Tick failure_tick = 0;
+    bool failure_seen = false;
   };
 
   constexpr StrainGauge() noexcept : StrainGauge(Config{}) {}
@@ -47,6 +52,12 @@ class StrainGauge {
       state_.saturated = reading->saturated || reading->raw <= config_.raw_min || reading->raw >= config_.raw_max;
       if (fresh && state_.tare_left > 0) accumulate_tare(reading->raw);
       state_.value_counts = reading->raw;
+    } else if (reading) {
+      if (!state_.failure_seen || reading->tick != state_.failure_tick) {
+        if (state_.failed_readings != UINT32_MAX) ++state_.failed_readings;
+        state_.failure_tick = reading->tick;
+        state_.failure_seen = true;
+      }
     }
     state_.stale = !state_.seen || now - state_.last_tick > config_.stale_after || state_.last_tick > now;
     if (state_.stale) {

@@ -1,12 +1,14 @@
 #pragma once
 // The safety state machine. Every transition is an explicit method; faults latch and only a re-arm whose
-// checks pass clears them.
+// checks pass clears them (docs/can-protocol.md, "What clears a fault").
 //
 //   init --boot_complete--> disarmed --arm (no fault active or latched)--> armed
-//   disarmed|fault --home--> homing --found--> disarmed
+//   disarmed --home (no fault active)--> homing --found--> disarmed
 //   armed|homing --any fault--> fault     (safe behaviour starts in the same tick)
 //   armed|fault|homing --disarm--> disarmed (latched faults stay latched)
 //   fault|disarmed --rearm (no fault active)--> armed, latched faults cleared
+// A lever in fault leaves it only by an explicit disarm (the host has seen the fault; the faults stay latched)
+// or re-arm (the host clears them): a home meant for another lever must not set a faulted one moving.
 // Position validity is the lever's to check before arm and rearm (an unhomed lever may not arm).
 #include <cstdint>
 
@@ -64,10 +66,11 @@ class Supervisor {
     return true;
   }
 
-  // Homing drives the motor, so it starts only from a state without torque, and only while none of the
-  // faults that would stop it holds; latched faults stay latched (a re-arm clears them).
+  // Homing drives the motor, so it starts only from disarmed (never straight out of fault, whose safe
+  // behaviour only a disarm or a re-arm ends), and only while none of the faults that would stop it holds;
+  // latched faults stay latched (a re-arm clears them).
   constexpr bool home(FaultBits active) noexcept {
-    if (state_ != LeverState::disarmed && state_ != LeverState::fault) return false;
+    if (state_ != LeverState::disarmed) return false;
     if (active != 0) return false;
     state_ = LeverState::homing;
     return true;

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# tools/dbc-decode as a user runs it, and on garbage: help and version, the exit codes and one-line messages of
+# docs/bad-input.md for every kind of bad DBC and log, never a traceback, never a hang.
+# usage: dbc_decode_cli.sh path/to/tools/dbc-decode path/to/lever.dbc
+set -uo pipefail
+decode=$1
+dbc=$2
+source "$(dirname "$0")/lib.sh"
+run() {  # run ARGS...: never more than 10 s; sets code, output in $work/out and $work/err
+  timeout 10 "$decode" "$@" >"$work/out" 2>"$work/err" </dev/null
+  code=$?
+}
+expect() {  # expect CODE NAME EXPECTED_MESSAGE ARGS...
+  local want=$1 name=$2 expected=$3; shift 3
+  run "$@"
+  check "$name: exit code $want (got $code)" test "$code" -eq "$want"
+  check "$name: says '$expected' (got: $(head -c 300 "$work/err"))" grep -qF -- "$expected" "$work/err"
+  check "$name: no traceback" bash -c "! grep -q Traceback '$work/err'"
+  check "$name: at most 21 lines of messages (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -le 21
+}
+
+run --help; check "--help exits 0" test "$code" -eq 0
+check "--help documents the exit codes" grep -q "Exit codes" "$work/out"
+run --version; check "--version exits 0" test "$code" -eq 0
+check "--version names the program" grep -q "dbc-decode" "$work/out"
+expect 2 "no arguments" "usage: dbc-decode"
+expect 2 "an unknown option" "unknown option '--frobnicate'" --frobnicate "$dbc"
+
+# The DBC: only a regular file of UTF-8 text, in the subset this decoder reads.
+mkdir "$work/adir"; mkfifo "$work/afifo"
+expect 2 "a missing DBC" "cannot read: No such file" "$work/none.dbc"
+expect 2 "a DBC that is a directory" "a directory, not a DBC file" "$work/adir"
+expect 2 "a DBC that is a device" "a device, not a DBC file" /dev/zero
+expect 2 "a DBC that is a FIFO" "a FIFO, not a DBC file" "$work/afifo"
+head -c 4096 /dev/urandom >"$work/random.dbc"
+expect 2 "a DBC of random bytes" "$work/random.dbc: " "$work/random.dbc"
+printf 'hello\nworld\n' >"$work/text.dbc"
+expect 2 "a DBC of text without messages" "no messages (BO_ lines); not a DBC file" "$work/text.dbc"
+head -c $((1024 * 1024 + 1)) /dev/zero | tr '\0' ' ' >"$work/huge.dbc"
+expect 2 "a DBC over 1 MiB" "a DBC file is at most that" "$work/huge.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ S : 0|16@1+ (abc,0) [0|0] "" Node\n' >"$work/factor.dbc"
+expect 2 "a factor that is no number" "factor 'abc' is not a number" "$work/factor.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ S : 0|16@1+ (1e400,0) [0|0] "" Node\n' >"$work/inf.dbc"
+expect 2 "a factor that is infinite" "is not finite" "$work/inf.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ S : 60|16@1+ (1,0) [0|0] "" Node\n' >"$work/wide.dbc"
+expect 2 "a signal beyond the frame" "does not fit in 8 bytes" "$work/wide.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ S : 0|0@1+ (1,0) [0|0] "" Node\n' >"$work/empty-signal.dbc"
+expect 2 "a signal of no bits" "does not fit" "$work/empty-signal.dbc"
+printf 'BO_ 256 M: 99 Node\n' >"$work/long.dbc"
+expect 2 "a message longer than a CAN frame" "a CAN frame has at most 64" "$work/long.dbc"
+printf 'BO_ 256 M: 8 Node\nBO_ 256 N: 8 Node\n' >"$work/twice.dbc"
+expect 2 "an id defined twice" "defined twice" "$work/twice.dbc"
+
+# The log: a file, a FIFO or stdin; lines that are no frames are errors (exit 1), each named, the first 20.
+printf '(1.000000) vcan0 700#0100000000000000\n' >"$work/good.log"
+run "$dbc" "$work/good.log"
+check "a good frame decodes: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+check "a good frame decodes: the HSI's heartbeat" grep -q "LeverHeartbeatHsi State=1" "$work/out"
+expect 2 "a log that is a directory" "a directory, not a candump -L log" "$dbc" "$work/adir"
+expect 2 "a log that is a device" "a device, not a candump -L log" "$dbc" /dev/zero
+expect 2 "a missing log" "cannot read: No such file" "$dbc" "$work/none.log"
+head -c 100000 /dev/urandom >"$work/random.log"
+expect 1 "a log of random bytes" "not a candump -L frame" "$dbc" "$work/random.log"
+check "a log of random bytes: the rest counted" grep -q "more lines did not decode" "$work/err"
+printf '(1.000000) vcan0 700#010\n' >"$work/odd.log"
+expect 1 "an odd number of hex digits" "$work/odd.log:1: not a candump -L frame" "$dbc" "$work/odd.log"
+printf '(1.000000) vcan0 7FF#00\n(1.000000) vcan0 700#01\n' >"$work/unknown.log"
+expect 1 "an id the DBC lacks, a wrong length" "7FF: an id the DBC does not define" "$dbc" "$work/unknown.log"
+check "a wrong length too" grep -q "700: 1 bytes, not 8" "$work/err"
+{ head -c 10000000 /dev/zero | tr '\0' A; echo; cat "$work/good.log"; } >"$work/longline.log"
+expect 1 "a 10 MB line" "longer than 4096 bytes" "$dbc" "$work/longline.log"
+check "a 10 MB line: the frame after it still decodes" grep -q "LeverHeartbeatHsi" "$work/out"
+(sleep 0.2; cat "$work/good.log") >"$work/afifo" &
+run "$dbc" "$work/afifo"
+check "a log from a FIFO: decoded (exit $code)" test "$code" -eq 0
+check "a log from a FIFO: its frame" grep -q "LeverHeartbeatHsi" "$work/out"
+wait
+timeout 10 "$decode" --summary "$dbc" - <"$work/good.log" >"$work/out" 2>"$work/err"; code=$?
+check "stdin, --summary: exit 0 (got $code)" test "$code" -eq 0
+check "stdin, --summary: one message counted" test "$(jq .messages.LeverHeartbeatHsi.frames "$work/out")" = 1
+for i in $(seq 5000); do cat "$work/good.log"; done >"$work/many.log"
+timeout 10 "$decode" "$dbc" "$work/many.log" 2>"$work/err" | head -n 1 >/dev/null
+check "a reader that goes away (| head): no traceback" bash -c "! grep -q Traceback '$work/err'"
+
+report "dbc-decode"

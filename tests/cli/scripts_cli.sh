@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Every script refuses what it does not take, naming the argument, exit 2, before it does anything (none of these
+# calls installs, builds or runs anything).
+# usage: scripts_cli.sh REPO_ROOT
+set -uo pipefail
+root=$1
+source "$(dirname "$0")/lib.sh"
+refuses() {  # refuses NAME ARGUMENT_NAMED COMMAND...
+  local name=$1 named=$2; shift 2
+  timeout 20 "$@" >"$work/out" 2>"$work/err" </dev/null
+  local code=$?
+  check "$name: exit 2 (got $code)" test "$code" -eq 2
+  check "$name: names '$named' (got: $(head -c 200 "$work/err"))" grep -qF -- "$named" "$work/err"
+}
+for script in check-skips build build-mcu rate-table hil-change-bounds-wall-tap hil-change-bounds-sphere-3dof demo test setup package \
+  cross-build; do
+  refuses "scripts/$script --frobnicate" "--frobnicate" "$root/scripts/$script" --frobnicate
+done
+refuses "scripts/package with an unknown architecture" "'riscv64'" "$root/scripts/package" riscv64
+refuses "scripts/package with a fourth argument" "'extra'" "$root/scripts/package" amd64 b d extra
+refuses "scripts/cross-build with an unknown architecture" "'riscv64'" "$root/scripts/cross-build" riscv64
+refuses "scripts/cross-build with a third argument" "'extra'" "$root/scripts/cross-build" arm64 b extra
+refuses "scripts/build-mcu with a second argument" "'extra'" "$root/scripts/build-mcu" dir extra
+refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
+refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
+refuses "scripts/demo with an argument" "'now'" "$root/scripts/demo" now
+refuses "scripts/test with an argument" "'now'" "$root/scripts/test" now
+refuses "fuzz/run-datagram-fuzzer --frobnicate" "--frobnicate" "$root/fuzz/run-datagram-fuzzer" --frobnicate
+refuses "tools/dbc-decode --frobnicate" "--frobnicate" "$root/tools/dbc-decode" --frobnicate x.dbc
+report "scripts"

@@ -1,0 +1,166 @@
+// The levers' crossover frequencies and phase margins, computed from the firmware's gains and the HIL's plant,
+// and the timing budget of firmware/core derived from them (docs/firmware.md, "Timing budget"): the defaults of
+// StepTiming::Config are held to the derivation, so a change of gains, plant or budget that breaks it fails here.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+
+#include "lever/fw/lever_config.hpp"
+#include "lever/hil/simulation.hpp"
+#include "loop_response.hpp"
+
+using namespace lever;
+using test::Complex;
+using test::kPeriod;
+
+namespace {
+
+// The share of a loop's phase margin that timing may spend; the rest stays for what the model leaves out.
+constexpr double kTimingShareOfMargin = 0.5;
+
+struct Loops {
+  fw::LeverConfig fw = fw::LeverConfig{};  // the firmware's gains as a board runs them
+  hil::SimConfig sim = hil::SimConfig{};   // the HIL's plant, wall, operator and amplifier (docs/hil-model.md)
+
+  test::LeverMechanics top_free(bool moving) const {
+    const auto& p = sim.top_plant;
+    // At rest the Coulomb friction is a steep linear zone (coulomb / coulomb_speed), in motion it adds nothing.
+    return {p.inertia, p.viscous + (moving ? 0.0 : p.coulomb / p.coulomb_speed), 0.0, p.motor_time_constant};
+  }
+  test::LeverMechanics top_at_wall() const {
+    const auto& p = sim.top_plant;
+    return {p.inertia, p.viscous + sim.wall.damping, sim.wall.stiffness, p.motor_time_constant};
+  }
+  test::LeverMechanics hsi_in_hand() const {
+    const auto& p = sim.hsi_plant;
+    const auto& h = sim.operator_params;
+    return {p.inertia + h.hand_inertia, p.viscous + h.damping, h.stiffness, p.motor_time_constant};
+  }
+
+  // The TOP's position loop broken at its torque: PD on the angle, the D through the velocity estimate.
+  Complex top_loop(const test::SampledPlant& plant, double w) const {
+    const Complex z = std::polar(1.0, w * kPeriod);
+    const Complex v = test::velocity_estimate(z, fw.velocity.bandwidth_rad_s);
+    return (fw.position.kp + fw.position.kd * v) * plant.at(z);
+  }
+
+  // The HSI in contact, broken at its torque: its own contact damping, and the teleoperation loop (its angle
+  // to the TOP over the link, the TOP's closed position loop pressing the wall, the wall's force through the
+  // amplifier and back over the link, displayed). `gauge_delay_s`: the amplifier's output hold and, on a
+  // board, the Modbus poll.
+  Complex hsi_loop(const test::SampledPlant& hsi, const test::SampledPlant& top, int link_ticks, double gauge_delay_s,
+                   double w) const {
+    const Complex z = std::polar(1.0, w * kPeriod);
+    const Complex s{0.0, w};
+    const Complex v = test::velocity_estimate(z, fw.velocity.bandwidth_rad_s);
+    const auto& c = fw.position;
+    const Complex pt = top.at(z);
+    const Complex tracking = pt * (c.kp + (c.kd + c.kff_velocity) * v) / (1.0 + pt * (c.kp + c.kd * v));
+    const double pole = 2.0 * std::numbers::pi * sim.gauge.pole_hz();
+    const Complex amplifier = std::exp(-s * gauge_delay_s) / ((1.0 + s / pole) * (1.0 + s / pole));
+    const Complex wall_torque = sim.wall.stiffness + sim.wall.damping * s;
+    const double display = fw.display.gain * fw.display.lever_arm_m / sim.top_plant.radius;
+    const Complex teleoperation = std::pow(z, -2.0 * link_ticks) * amplifier * wall_torque * tracking * display;
+    return (teleoperation + fw.display.contact_damping_nms * v) * hsi.at(z);
+  }
+};
+
+void print(const char* loop, const test::Margin& m) {
+  std::printf("loop margins: %-44s crossover %6.2f Hz  phase margin %6.1f deg  %5.1f deg/ms  delay margin %5.2f ms\n",
+              loop, m.crossover_hz, m.phase_margin_deg, m.degrees_per_ms(), m.delay_margin_ms());
+}
+
+// The TOP at the wall, linear, simulated at 10 us with the firmware's estimator and PD, its torque applied
+// `delay_s` after each sample: the peak angle in the last 100 ms over the first 100 ms after a 1 mrad kick.
+double top_growth_with_delay(const Loops& l, double delay_s) {
+  const auto m = l.top_at_wall();
+  constexpr int kSub = 100;
+  const double h = kPeriod / kSub;
+  const int delay_steps = static_cast<int>(std::lround(delay_s / h));
+  std::deque<double> pending(static_cast<std::size_t>(delay_steps) + 1, 0.0);
+  double angle = 1e-3, speed = 0.0, motor = 0.0, est_angle = angle, est_speed = 0.0, command = 0.0;
+  const double b = l.fw.velocity.bandwidth_rad_s;
+  double first = 0.0, last = 0.0;
+  constexpr int kTicks = 800;
+  for (int k = 0; k < kTicks; ++k) {
+    const double e = angle - est_angle;  // the firmware's step, on the sampled angle
+    est_speed += b * b * e * kPeriod;
+    est_angle += (est_speed + 2.0 * b * e) * kPeriod;
+    const double torque = -(l.fw.position.kp * angle + l.fw.position.kd * est_speed);
+    for (int i = 0; i < kSub; ++i) {
+      pending.push_back(torque);
+      command = pending.front();
+      pending.pop_front();
+      motor += (command - motor) * h / m.motor_lag_s;
+      speed += (motor - m.damping * speed - m.stiffness * angle) / m.inertia * h;
+      angle += speed * h;
+    }
+    if (k < 100) first = std::max(first, std::fabs(angle));
+    if (k >= kTicks - 100) last = std::max(last, std::fabs(angle));
+  }
+  return last / first;
+}
+
+}  // namespace
+
+TEST_CASE("the loops' crossovers and phase margins, and the timing budget of firmware/core derived from them",
+          "[hil][timing][margins]") {
+  const Loops l;
+  const test::SampledPlant top_free_moving(l.top_free(true)), top_free_rest(l.top_free(false));
+  const test::SampledPlant top_wall(l.top_at_wall()), hsi(l.hsi_in_hand());
+  const int link = hil::nominal_one_way_delay_ticks(l.sim);
+  const double hil_gauge_hold = 0.5 / l.sim.gauge.output_rate_hz();
+  // On a board the newest Modbus reading is half a poll old on average, plus the exchange (1.5 ms at 115200 baud).
+  const double board_gauge_hold = 0.5 * 5e-3 + 1.5e-3;
+
+  const auto free_moving = test::smallest_margin([&](double w) { return l.top_loop(top_free_moving, w); });
+  const auto free_rest = test::smallest_margin([&](double w) { return l.top_loop(top_free_rest, w); });
+  const auto wall = test::smallest_margin([&](double w) { return l.top_loop(top_wall, w); });
+  const auto contact =
+      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, hil_gauge_hold, w); });
+  const auto contact_board =
+      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, board_gauge_hold, w); });
+  REQUIRE(free_moving);
+  REQUIRE(free_rest);
+  REQUIRE(wall);
+  REQUIRE(contact);
+  REQUIRE(contact_board);
+  print("TOP free, moving (viscous friction only)", *free_moving);
+  print("TOP free, at rest (Coulomb's linear zone)", *free_rest);
+  print("TOP at the wall", *wall);
+  print("HSI in contact, hand on (HIL amplifier)", *contact);
+  print("HSI in contact, hand on (Modbus at 5 ms)", *contact_board);
+
+  // The frequency responses against the time domain: a sustained extra delay below the TOP's delay margin
+  // leaves its loop at the wall stable, one above it does not.
+  CHECK(top_growth_with_delay(l, 0.0) < 0.1);
+  CHECK(top_growth_with_delay(l, 0.8 * wall->delay_margin_ms() * 1e-3) < 1.0);
+  CHECK(top_growth_with_delay(l, 1.2 * wall->delay_margin_ms() * 1e-3) > 1.0);
+
+  // The budget: timing may cost each closed loop that must stay stable (the TOP at the wall, the HSI in
+  // contact) half its phase margin, within each period of its crossover; a step's duration is a sustained
+  // delay and takes its share first. The TOP in free motion is left out: moving, its margin is a few degrees
+  // (the tracking loop's velocity lags the angle by 80 degrees at 250 rad/s), which no timing budget can
+  // protect; at rest Coulomb's linear zone damps it (docs/firmware.md, "Timing budget").
+  const fw::StepTiming::Config timing{};
+  const double step_ms = static_cast<double>(timing.long_step_us) * 1e-3;
+  const auto budget_ms = [&](const test::Margin& m) { return kTimingShareOfMargin * m.delay_margin_ms(); };
+  const double lateness_ms = std::min({budget_ms(*wall), budget_ms(*contact), budget_ms(*contact_board)}) - step_ms;
+  const double slowest_cycle_ms =
+      1e3 / std::min({wall->crossover_hz, contact->crossover_hz, contact_board->crossover_hz});
+  std::printf(
+      "loop margins: budget %.2f ms of lost time per %.1f ms (the slowest crossover's period), after %.2f ms of "
+      "step; a late tick loses %.0f ms: %.1f deg at the wall, %.1f deg at the HSI\n",
+      lateness_ms, slowest_cycle_ms, step_ms, kPeriod * 1e3, wall->degrees_per_ms(), contact->degrees_per_ms());
+  // One late tick must fit, or no lateness would be tolerable at all.
+  CHECK(lateness_ms >= 1.0);
+  // The firmware allows fault_after - 1 periods of lost time per window: no more than the budget, and the
+  // whole periods of it.
+  const double allowed_ms = static_cast<double>(timing.fault_after - 1) * kPeriod * 1e3;
+  CHECK(allowed_ms <= lateness_ms);
+  CHECK(allowed_ms + kPeriod * 1e3 > lateness_ms);
+  // Within any crossover period of any of the loops, no more than the budget: the window spans the longest.
+  CHECK(static_cast<double>(timing.window) == std::ceil(slowest_cycle_ms));
+}
