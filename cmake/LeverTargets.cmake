@@ -6,6 +6,10 @@ function(lever_target_defaults target)
   set(scope PRIVATE)
   target_compile_features(${target} ${scope} cxx_std_20)
   target_compile_options(${target} ${scope} -Wall -Wextra -Werror -Wshadow -Wconversion -Wno-sign-conversion)
+  # The same arithmetic on every architecture: GCC fuses a*b+c into one FMA instruction where the machine has one
+  # (arm64, not x86-64's baseline), which rounds once instead of twice. The HIL's seeded runs, and the codec's
+  # sender and receiver models on two different boards, must compute the same bits (lever/math/elementary.hpp).
+  target_compile_options(${target} ${scope} -ffp-contract=off)
   # GCC 12 reports a false -Wrestrict inside libstdc++'s std::string operator+ at -O3 (GCC bug 105651, fixed
   # in 13); every string concatenation would otherwise need a workaround.
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)

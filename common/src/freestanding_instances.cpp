@@ -1,9 +1,11 @@
-// Instantiates every codec template the project uses, compiled with -fno-exceptions -fno-rtti. The object's
-// undefined symbols are then checked (cmake/check_freestanding.sh): anything beyond a short list of libm
-// and memory-copy routines means the code reached the heap, exceptions or the OS.
+// Instantiates every codec template the project uses, the elementary functions and the Gaussian draw, compiled with
+// -fno-exceptions -fno-rtti. The object's undefined symbols are then checked (cmake/check_freestanding.sh): anything
+// beyond sqrt, fabs and the memory-copy routines means the code reached libm, the heap, exceptions or the OS.
 #include <cstdint>
 
 #include "lever/codec/codec.hpp"
+#include "lever/common/rng.hpp"
+#include "lever/math/elementary.hpp"
 
 namespace lever::codec {
 
@@ -25,3 +27,11 @@ template class DeadbandReceiver<double, 1, FixedPointQuantizer<double, std::int3
 template class DeadbandReceiver<double, 3, FixedPointQuantizer<double, std::int32_t>>;
 
 }  // namespace lever::codec
+
+namespace lever::freestanding {
+
+// The elementary functions and the Gaussian draw call no libm routine but sqrt: that is their point.
+double elementary(double x) { return math::exp(x) + math::log(x) + math::sin(x) + math::cos(x) + math::acos(x); }
+double gaussian(Rng& rng) { return rng.normal(); }
+
+}  // namespace lever::freestanding

@@ -67,6 +67,9 @@ void HumanOperator::update(fw::Tick now, double felt_force) {
 }
 
 // The scenarios' scripts. Ranges describe what people do on a desk-top lever; docs/hil-model.md says why.
+// A call takes one draw in its arguments at most: C++ leaves their order open, and GCC evaluates them right to left
+// on x86-64 and left to right on Arm, which made the same seed another run there. The others are drawn before, in
+// x86-64's order (last argument first), so that its runs stay what they were.
 Segment HumanOperator::next_segment() {
   auto move = [](double target, double move_s, double dwell_s) {
     return Segment{Segment::Kind::move, target, 0.0, move_s + dwell_s, move_s};
@@ -74,15 +77,22 @@ Segment HumanOperator::next_segment() {
   switch (scenario_) {
     case ScenarioKind::free_motion:
       // Reaching back and forth, never as far as the wall.
-      return move(rng_.uniform(0.0, wall_ - 0.08), rng_.uniform(0.3, 1.0), rng_.uniform(0.0, 0.3));
+      {
+        const double dwell = rng_.uniform(0.0, 0.3);
+        const double move_s = rng_.uniform(0.3, 1.0);
+        return move(rng_.uniform(0.0, wall_ - 0.08), move_s, dwell);
+      }
     case ScenarioKind::press_hold:
       switch (script_step_++ % 3) {
         case 0:
           return move(wall_ - 0.02, rng_.uniform(0.4, 0.7), 0.1);
         case 1:
           return Segment{Segment::Kind::press, 0.0, rng_.uniform(3.0, 6.0), rng_.uniform(2.0, 4.0), 0.0};
-        default:
-          return move(rng_.uniform(0.05, 0.15), rng_.uniform(0.3, 0.6), rng_.uniform(0.5, 1.0));
+        default: {
+          const double dwell = rng_.uniform(0.5, 1.0);
+          const double move_s = rng_.uniform(0.3, 0.6);
+          return move(rng_.uniform(0.05, 0.15), move_s, dwell);
+        }
       }
     case ScenarioKind::sphere_3dof:  // refused by the constructor
     case ScenarioKind::wall_tap:
@@ -91,15 +101,25 @@ Segment HumanOperator::next_segment() {
         // A tap is a quick thrust past the surface and back: the wall stops the lever, the hand rebounds.
         const bool thrust = taps_left_ % 2 == 0;
         --taps_left_;
-        return thrust ? move(wall_ + rng_.uniform(0.02, 0.05), rng_.uniform(0.10, 0.15), 0.0)
-                      : move(wall_ - rng_.uniform(0.03, 0.08), rng_.uniform(0.12, 0.2), rng_.uniform(0.0, 0.1));
+        if (thrust) {
+          const double move_s = rng_.uniform(0.10, 0.15);
+          return move(wall_ + rng_.uniform(0.02, 0.05), move_s, 0.0);
+        }
+        const double dwell = rng_.uniform(0.0, 0.1);
+        const double move_s = rng_.uniform(0.12, 0.2);
+        return move(wall_ - rng_.uniform(0.03, 0.08), move_s, dwell);
       }
       switch (script_step_++ % 4) {
-        case 0:
-          return move(rng_.uniform(0.05, 0.2), rng_.uniform(0.4, 0.8), rng_.uniform(0.1, 0.4));
-        case 1:
+        case 0: {
+          const double dwell = rng_.uniform(0.1, 0.4);
+          const double move_s = rng_.uniform(0.4, 0.8);
+          return move(rng_.uniform(0.05, 0.2), move_s, dwell);
+        }
+        case 1: {
           taps_left_ = 2 * static_cast<int>(1 + rng_.next() % 3) - 1;  // this thrust plus 0-2 more taps
-          return move(wall_ + rng_.uniform(0.02, 0.05), rng_.uniform(0.10, 0.15), 0.0);
+          const double move_s = rng_.uniform(0.10, 0.15);
+          return move(wall_ + rng_.uniform(0.02, 0.05), move_s, 0.0);
+        }
         case 2:
           return move(wall_ - 0.02, 0.2, 0.0);
         default:

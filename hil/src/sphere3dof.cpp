@@ -100,7 +100,7 @@ SphereResult run_sphere(const SphereConfig& c) {
 
   SphereResult r;
   const auto ticks = static_cast<std::uint64_t>(std::llround(c.duration_s / kTick));
-  if (c.record_trace && !c.trace_sink) r.trace.reserve(ticks);
+  if (c.record_trace && !c.trace_sink) r.trace.reserve(static_cast<std::size_t>(ticks));
   for (std::uint64_t k = 1; k <= ticks; ++k) {
     const double t = static_cast<double>(k) * kTick;
     const Nanos t_ns = static_cast<Nanos>(k) * kTickNs;

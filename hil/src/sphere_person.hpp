@@ -10,6 +10,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/hil/sphere3dof.hpp"
+#include "lever/math/elementary.hpp"
 #include "sphere_vec.hpp"
 
 namespace lever::hil {
@@ -31,8 +32,8 @@ class Tremor {
         const double phase = rng.uniform(0.0, 2.0 * std::numbers::pi);
         const std::complex<double> impedance(h.stiffness - m * w * w, h.damping * w);
         Component& c = components_[axis][static_cast<std::size_t>(i)];
-        c.phasor = impedance * std::polar(amplitude, phase);
-        c.step = std::polar(1.0, w * kSphereTick);
+        c.phasor = impedance * std::complex<double>(amplitude * math::cos(phase), amplitude * math::sin(phase));
+        c.step = std::complex<double>(math::cos(w * kSphereTick), math::sin(w * kSphereTick));
       }
       count_ = std::min(k, kMax);
     }
@@ -86,8 +87,8 @@ class Explorer {
     if (omega_ < 1e-9) {
       n = n_from_;
     } else {
-      const double a = std::sin((1.0 - s) * omega_) / sin_omega_;
-      const double b = std::sin(s * omega_) / sin_omega_;
+      const double a = math::sin((1.0 - s) * omega_) / sin_omega_;
+      const double b = math::sin(s * omega_) / sin_omega_;
       n = add(scale(n_from_, a), scale(n_to_, b));
     }
     return add(s_.centre, scale(n, rho_from_ + (rho_to_ - rho_from_) * s));
@@ -100,53 +101,62 @@ class Explorer {
   double press_radius(double force) const { return s_.radius_m - force * (1.0 / h_.stiffness + 1.0 / s_.stiffness); }
 
   Vec3 random_direction() {
-    const double cos_theta = 1.0 - rng_.uniform() * (1.0 - std::cos(h_.cap_half_angle_rad));
+    const double cos_theta = 1.0 - rng_.uniform() * (1.0 - math::cos(h_.cap_half_angle_rad));
     const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
     const double phi = rng_.uniform(0.0, 2.0 * std::numbers::pi);
-    return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+    return {sin_theta * math::cos(phi), sin_theta * math::sin(phi), cos_theta};
   }
 
+  // A call to go() takes one draw in its arguments at most, the duration being drawn before: C++ leaves the order of
+  // arguments open, and GCC evaluates them right to left on x86-64 and left to right on Arm, which made the same seed
+  // another run there. Drawing the last argument first keeps x86-64's runs what they were.
   void go(const Vec3& n_to, double rho_to, double duration) {
     n_from_ = n_to_;
     rho_from_ = rho_to_;
     n_to_ = n_to;
     rho_to_ = rho_to;
-    omega_ = std::acos(std::clamp(dot(n_from_, n_to_), -1.0, 1.0));
-    sin_omega_ = std::sin(omega_);
+    omega_ = math::acos(std::clamp(dot(n_from_, n_to_), -1.0, 1.0));
+    sin_omega_ = math::sin(omega_);
     duration_ = duration;
   }
 
   // A move over the surface at a speed a person strokes with; never shorter than a quick flick.
   double travel_time(const Vec3& n_to, double radius) {
-    const double arc = std::acos(std::clamp(dot(n_to_, n_to), -1.0, 1.0)) * radius;
+    const double arc = math::acos(std::clamp(dot(n_to_, n_to), -1.0, 1.0)) * radius;
     return std::max(0.3, arc / rng_.uniform(h_.stroke_speed_min_mps, h_.stroke_speed_max_mps));
   }
 
   void next_segment(double now) {
     start_ = now;
     switch (phase_) {
-      case Phase::descend:
-        go(n_to_, press_radius(rng_.uniform(h_.stroke_force_min_n, h_.stroke_force_max_n)), rng_.uniform(0.2, 0.4));
+      case Phase::descend: {
+        const double duration = rng_.uniform(0.2, 0.4);  // drawn first: see go()
+        go(n_to_, press_radius(rng_.uniform(h_.stroke_force_min_n, h_.stroke_force_max_n)), duration);
         strokes_left_ = 2 + static_cast<int>(rng_.next() % 4);
         press_before_ = static_cast<int>(rng_.next() % static_cast<std::uint64_t>(strokes_left_));
         pressed_ = false;
         phase_ = Phase::stroke;
         return;
-      case Phase::stroke:
+      }
+      case Phase::stroke: {
         if (!pressed_ && strokes_left_ == press_before_) {
           pressed_ = true;
-          go(n_to_, press_radius(rng_.uniform(h_.press_force_min_n, h_.press_force_max_n)), rng_.uniform(0.3, 0.8));
+          const double duration = rng_.uniform(0.3, 0.8);
+          go(n_to_, press_radius(rng_.uniform(h_.press_force_min_n, h_.press_force_max_n)), duration);
           return;
         }
         if (strokes_left_ > 0) {
           --strokes_left_;
           const Vec3 n = random_direction();
-          go(n, press_radius(rng_.uniform(h_.stroke_force_min_n, h_.stroke_force_max_n)), travel_time(n, s_.radius_m));
+          const double duration = travel_time(n, s_.radius_m);
+          go(n, press_radius(rng_.uniform(h_.stroke_force_min_n, h_.stroke_force_max_n)), duration);
           return;
         }
-        go(n_to_, s_.radius_m + rng_.uniform(h_.lift_min_m, h_.lift_max_m), rng_.uniform(0.2, 0.4));
+        const double duration = rng_.uniform(0.2, 0.4);
+        go(n_to_, s_.radius_m + rng_.uniform(h_.lift_min_m, h_.lift_max_m), duration);
         phase_ = Phase::lift;
         return;
+      }
       case Phase::lift: {
         const Vec3 n = random_direction();
         go(n, rho_to_, travel_time(n, rho_to_));

@@ -116,7 +116,7 @@ bool CandumpRecorder::record(std::int64_t timestamp_us, std::string_view iface,
       return false;
     }
   }
-  Record& slot = slots_[head & mask_];
+  Record& slot = slots_[static_cast<std::size_t>(head & mask_)];
   slot.timestamp_us = timestamp_us;
   std::memcpy(slot.iface.data(), iface.data(), iface.size());
   slot.iface[iface.size()] = '\0';
@@ -201,7 +201,7 @@ void CandumpRecorder::drain() {
     const std::uint64_t head = head_.load(std::memory_order_acquire);
     if (tail == head) break;
     const std::uint64_t end = std::min(head, tail + kReleaseChunk);
-    for (; tail != end; ++tail) append_line(slots_[tail & mask_]);
+    for (; tail != end; ++tail) append_line(slots_[static_cast<std::size_t>(tail & mask_)]);
     tail_.store(end, std::memory_order_release);  // the lines are copied out: the producer may reuse the slots
   }
   write_pending();

@@ -275,11 +275,15 @@ ProbeTiming probe_timing(const Datagram& reply, std::uint64_t arrival_us) noexce
   const std::uint64_t t2 = reply.echo.receive_timestamp_us;
   const std::uint64_t t3 = reply.timestamp_us;
   const std::uint64_t t4 = arrival_us;
-  // Differences of one clock's readings wrap modulo 2^64 like the clocks; the offset's sum is taken in 128 bits.
+  // Differences of one clock's readings wrap modulo 2^64 like the clocks. The offset is (outbound + inbound) / 2
+  // rounded toward zero, without the sum (which can overflow 64 bits; 32-bit Arm has no 128-bit integer): the floor
+  // of the half sum by halves (arithmetic shifts), then one up where the sum is odd and negative.
   const auto round_trip = static_cast<std::int64_t>((t4 - t1) - (t3 - t2));
   const auto outbound = static_cast<std::int64_t>(t2 - t1);
   const auto inbound = static_cast<std::int64_t>(t3 - t4);
-  const auto offset = static_cast<std::int64_t>((static_cast<__int128>(outbound) + inbound) / 2);
+  const std::int64_t floor_half = (outbound >> 1) + (inbound >> 1) + (outbound & inbound & 1);
+  const bool odd = ((outbound ^ inbound) & 1) != 0;
+  const std::int64_t offset = floor_half + (odd && floor_half < 0 ? 1 : 0);
   return {round_trip, offset};
 }
 

@@ -9,7 +9,7 @@ void LatencyHistogram::record_ns(std::int64_t latency_ns) noexcept {
   const auto ns = static_cast<std::uint64_t>(std::max<std::int64_t>(latency_ns, 0));
   const std::uint64_t us = ns / 1000;
   if (us < kBins) {
-    ++bins_[us];
+    ++bins_[static_cast<std::size_t>(us)];  // us < kBins: fits a 32-bit size_t too
   } else {
     ++overflows_;
   }
@@ -20,7 +20,7 @@ void LatencyHistogram::record_ns(std::int64_t latency_ns) noexcept {
 void LatencyHistogram::add_us(std::uint64_t us, std::uint64_t count) noexcept {
   if (count == 0) return;
   if (us < kBins) {
-    bins_[us] += count;
+    bins_[static_cast<std::size_t>(us)] += count;
   } else {
     overflows_ += count;
   }

@@ -1,11 +1,11 @@
 #pragma once
 // First-order low-pass applied before the deadband decision (paper section III-E): extrapolation
 // amplifies sensor noise, so the predictor sees a smoothed signal and the receiver gets smoothed values.
-#include <cmath>
 #include <cstddef>
 #include <numbers>
 
 #include "lever/common/vec.hpp"
+#include "lever/math/elementary.hpp"
 
 namespace lever::codec {
 
@@ -34,10 +34,11 @@ class LowPassPrefilter {
     const T dt = t - t_prev_;
     t_prev_ = t;
     // exp() dominates the cost; at a fixed sample period dt repeats exactly, so alpha is reused.
-    // Recomputing on any change keeps the result identical to evaluating the formula every time.
+    // Recomputing on any change keeps the result identical to evaluating the formula every time. lever::math's
+    // exp, in double for float too: both ends of a link compute the same alpha whatever their libm.
     if (!(dt == cached_dt_)) {
       cached_dt_ = dt;
-      alpha_ = T(1) - std::exp(-kTwoPi * cutoff_hz_ * dt);
+      alpha_ = T(1) - static_cast<T>(math::exp(static_cast<double>(-kTwoPi * cutoff_hz_ * dt)));
     }
     for (std::size_t i = 0; i < N; ++i) y_[i] = y_[i] + alpha_ * (x[i] - y_[i]);
     return y_;

@@ -1,9 +1,12 @@
 #pragma once
-// Seeded random numbers that give the same sequence on every compiler and standard library. The standard
-// distributions are implementation-defined, which would break "same seed, same bytes" across machines.
+// Seeded random numbers that give the same sequence on every compiler, standard library and architecture. The
+// standard distributions are implementation-defined, and libm's log, sin and cos differ in the last bit between
+// machines, either of which would break "same seed, same bytes" across machines.
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+
+#include "lever/math/elementary.hpp"
 
 namespace lever {
 
@@ -38,11 +41,11 @@ class Rng {
     }
     const double u1 = 1.0 - uniform();  // (0, 1]: log stays finite
     const double u2 = uniform();
-    const double radius = std::sqrt(-2.0 * std::log(u1));
+    const double radius = std::sqrt(-2.0 * math::log(u1));
     const double angle = 2.0 * std::numbers::pi * u2;
-    spare_ = radius * std::sin(angle);
+    spare_ = radius * math::sin(angle);
     has_spare_ = true;
-    return radius * std::cos(angle);
+    return radius * math::cos(angle);
   }
 
  private:

@@ -10,6 +10,7 @@
 
 #include "lever/common/rng.hpp"
 #include "lever/fw/strain_gauge.hpp"
+#include "lever/math/elementary.hpp"
 
 namespace lever::hil {
 
@@ -50,7 +51,7 @@ class StrainGaugeModel {
   StrainGaugeModel(const StrainGaugeParams& p, std::uint64_t seed) : p_(p), rng_(seed), period_s_(1.0 / p.adc_rate_hz) {
     if (p.filter_hz > 0.0) {
       const double h_over_tau = 2.0 * std::numbers::pi * p.pole_hz() * period_s_;
-      decay_ = std::exp(-h_over_tau);
+      decay_ = math::exp(-h_over_tau);
       coupling_ = h_over_tau * decay_;
     }
   }
