@@ -11,18 +11,18 @@ cd "$1" || exit 2
 # folder (the room) | the rooms it may include, by their include names; each may include itself
 rules=(
   "program|program"
-  "common|codec common protocol"
-  "firmware/core|codec common protocol fw"
-  "firmware/mcu|codec common protocol fw"
-  "platform|codec common protocol fw platform"
-  "firmware/app|codec common protocol fw platform program app"
-  "host/codec_tool|codec common protocol program"
-  "host/bridge|codec common protocol platform program"
-  "hil/devices|codec common protocol fw platform hil/devices"
-  "hil/include|codec common protocol fw hil"
-  "hil/src|codec common protocol fw hil"
-  "hil/app|codec common protocol fw platform program app hil hil/devices"
-  "hil/fw-sim|codec common protocol fw program app hil"
+  "common|codec common math protocol"
+  "firmware/core|codec common math protocol fw"
+  "firmware/mcu|codec common math protocol fw"
+  "platform|codec common math protocol fw platform"
+  "firmware/app|codec common math protocol fw platform program app"
+  "host/codec_tool|codec common math protocol program"
+  "host/bridge|codec common math protocol platform program"
+  "hil/devices|codec common math protocol fw platform hil/devices"
+  "hil/include|codec common math protocol fw hil"
+  "hil/src|codec common math protocol fw hil"
+  "hil/app|codec common math protocol fw platform program app hil hil/devices"
+  "hil/fw-sim|codec common math protocol fw program app hil"
 )
 
 bad=0 files=0
