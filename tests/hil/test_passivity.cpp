@@ -201,15 +201,9 @@ TEST_CASE("at 10, 25, 50 and 100 ms tdpa keeps contact onsets within twice the z
   for (const double delay_ms : kDelaysMs) check_drift_and_chatter(delay_ms, false, true);
 }
 
-// Met at 10 ms on x86-64 only: under arm64's libm one seed's trajectory parts from x86-64's and goes past it
-// (docs/firmware.md, traced), so there the test is an expected failure.
-#if defined(__aarch64__)
-#define LEVER_EXPECTED_TO_FAIL_ON_ARM64 "[!shouldfail]"
-#else
-#define LEVER_EXPECTED_TO_FAIL_ON_ARM64 ""
-#endif
+// Met at 10 ms, on every architecture alike (the HIL runs the same bits everywhere: tests/cross/hil_same_bytes.sh).
 TEST_CASE("at 10 ms tdpa keeps the TOP within 10 mrad of the delayed HSI before the first contact",
-          "[hil][passivity]" LEVER_EXPECTED_TO_FAIL_ON_ARM64) {
+          "[hil][passivity]") {
   check_drift_and_chatter(10.0, true, false);
 }
 
