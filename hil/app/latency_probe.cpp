@@ -18,6 +18,18 @@ double percentile(const std::vector<double>& sorted, double q) {
   return sorted[std::min(sorted.size(), std::max<std::size_t>(rank, 1)) - 1];
 }
 
+// The lever-pwm-sim controller behind a lever's motor, or nullopt after naming why there is none.
+std::optional<devices::PwmControllerState> open_controller(const app::FwConfig& config, const char* role) {
+  const auto motor = app::motor_config(config.board);
+  auto found = devices::PwmControllerState::find(motor.sysfs_root, motor.pwm_chip, motor.pwm_channel);
+  if (found && *found) return std::move(*found).value();
+  fmt::print(stderr, "lever-hil serve: --latency-probe: the {} motor's pwmchip{} under {}: {}\n", role, motor.pwm_chip,
+             motor.sysfs_root,
+             found ? found->error().message
+                   : "not a PWM controller of the kernel rig (tools/kernel-rig/run-in-guest --pwm-sim)");
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::int64_t LatencyProbe::now_ns() {
@@ -31,20 +43,9 @@ bool LatencyProbe::attach(const app::FwConfig& hsi, const app::FwConfig& top, co
     fmt::print(stderr, "lever-hil serve: --latency-probe: the TOP has no gauge to step\n");
     return false;
   }
-  const app::FwConfig* configs[2] = {&hsi, &top};
-  std::optional<devices::PwmControllerState>* controllers[2] = {&hsi_pwm_, &top_pwm_};
-  for (int i = 0; i < 2; ++i) {
-    const auto motor = app::motor_config(configs[i]->board);
-    auto found = devices::PwmControllerState::find(motor.sysfs_root, motor.pwm_chip, motor.pwm_channel);
-    if (!found || !*found) {
-      fmt::print(stderr, "lever-hil serve: --latency-probe: the {} motor's pwmchip{} under {}: {}\n",
-                 i == 0 ? "HSI" : "TOP", motor.pwm_chip, motor.sysfs_root,
-                 found ? found->error().message
-                       : "not a PWM controller of the kernel rig (tools/kernel-rig/run-in-guest --pwm-sim)");
-      return false;
-    }
-    controllers[i]->emplace(std::move(*found).value());
-  }
+  hsi_pwm_ = open_controller(hsi, "HSI");
+  top_pwm_ = open_controller(top, "TOP");
+  if (!hsi_pwm_ || !top_pwm_) return false;
   hsi_ = &hsi_devices;
   top_ = &top_devices;
   force_n_ = options_.force_base_n;
