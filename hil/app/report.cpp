@@ -111,6 +111,12 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"seed", config.seed},
       {"velocity_packet_rate", r.velocity_packet_rate},
       {"force_packet_rate", r.force_packet_rate},
+      {"velocity_deadband_rate", r.velocity_deadband_rate},
+      {"velocity_refresh_rate", r.velocity_refresh_rate},
+      {"velocity_rest_repeat_rate", r.velocity_rest_repeat_rate},
+      {"force_deadband_rate", r.force_deadband_rate},
+      {"force_refresh_rate", r.force_refresh_rate},
+      {"force_rest_repeat_rate", r.force_rest_repeat_rate},
       {"position_rmse", r.position_rmse_rad},
       {"force_rmse", r.force_rmse_n},
       {"force_jnd_violation", r.force_jnd_violation},
@@ -158,6 +164,11 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
              c.force_codec.p, c.force_codec.floor);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
+  fmt::print(out,
+             "    of which the deadband's (the paper's count): velocity {:.1f} %, force {:.1f} %; refresh {:.1f} % and "
+             "{:.1f} %; rest repeat {:.1f} % and {:.1f} %\n",
+             100 * r.velocity_deadband_rate, 100 * r.force_deadband_rate, 100 * r.velocity_refresh_rate,
+             100 * r.force_refresh_rate, 100 * r.velocity_rest_repeat_rate, 100 * r.force_rest_repeat_rate);
   fmt::print(out,
              "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);

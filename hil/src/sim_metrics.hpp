@@ -50,6 +50,7 @@ class SimMetrics {
   bool was_armed_[2] = {true, true};  // the scenario starts with both armed
   SimResult::LeverFaults lever_faults_[2];
   std::uint64_t refresh_frames_ = 0;
+  std::uint64_t by_cause_[2][3] = {};  // [HSI velocity, TOP force][fw::SendCause]
   double min_observed_energy_j_[2] = {0.0, 0.0};
 };
 

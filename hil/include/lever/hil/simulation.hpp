@@ -98,9 +98,13 @@ struct TraceRow {
 struct SimResult {
   double velocity_packet_rate = 0.0;  // HSI data frames per tick while armed
   double force_packet_rate = 0.0;     // TOP data frames per tick while armed
-  double position_rmse_rad = 0.0;     // TOP angle against HSI angle
-  double force_rmse_n = 0.0;          // displayed (HSI) against measured (TOP gauge)
-  double force_jnd_violation = 0.0;   // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
+  // The same frames by cause (fw::SendCause), adding up to the rates above: those the deadband rule alone sends
+  // (the paper's count), the refreshes and the rest repeats the rule would not have sent.
+  double velocity_deadband_rate = 0.0, velocity_refresh_rate = 0.0, velocity_rest_repeat_rate = 0.0;
+  double force_deadband_rate = 0.0, force_refresh_rate = 0.0, force_rest_repeat_rate = 0.0;
+  double position_rmse_rad = 0.0;    // TOP angle against HSI angle
+  double force_rmse_n = 0.0;         // displayed (HSI) against measured (TOP gauge)
+  double force_jnd_violation = 0.0;  // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
   // The same by cause (RunMetrics::add_force_causes): displayed against the measurement one nominal delay
   // earlier; the codec alone; the prefilter alone.
   double force_jnd_violation_link = 0.0, force_jnd_violation_codec = 0.0, force_jnd_violation_filter = 0.0;

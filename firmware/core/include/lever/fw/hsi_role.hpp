@@ -89,7 +89,7 @@ class HsiRole {
     m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
     m.seq = out.seq;
     m.flags = {position_saturated, out.saturated, out.refresh, out.mode, out.restart};
-    return OutgoingData{protocol::pack(m, pair), out.refresh};
+    return OutgoingData{protocol::pack(m, pair), out.refresh, out.cause};
   }
 
   // set_deadband for the motion direction, which the HSI sends.

@@ -358,6 +358,7 @@ class Lever {
     if (out->refresh) ++counters_.refresh_sent;
     telemetry_.sent_data = true;
     telemetry_.sent_refresh = out->refresh;
+    telemetry_.sent_cause = out->cause;
     if (const auto energy = role_.passivity().frame(now, out->refresh)) {
       send(protocol::pack(*energy, config_.pair, Role::kRole));
       ++counters_.energy_sent;

@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <optional>
 
+#include "lever/fw/send_cause.hpp"
+
 namespace lever::fw {
 
 struct LeverCounters {
@@ -30,8 +32,9 @@ struct LeverTelemetry {
   double torque_demand_nm = 0.0;  // before the limit
   double torque_nm = 0.0;         // commanded
   bool motor_enabled = false;
-  bool sent_data = false;     // this tick (deadband or refresh)
-  bool sent_refresh = false;  // this tick, and it was a refresh
+  bool sent_data = false;                      // this tick (deadband or refresh)
+  bool sent_refresh = false;                   // this tick, and it was a refresh
+  SendCause sent_cause = SendCause::deadband;  // this tick's data frame's (data_channel.hpp)
   // Passivity (zero while off), since this lever armed: what the controller dissipated, and the observer's
   // energy (the peer's input as received less this port's output).
   double dissipated_energy_j = 0.0;
