@@ -13,8 +13,8 @@ inline const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind
                                                        {"free-motion", ScenarioKind::free_motion},
                                                        {"press-hold", ScenarioKind::press_hold},
                                                        {"sphere-3dof", ScenarioKind::sphere_3dof}};
-inline const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site},
-                                                    {"two-sites", Topology::two_sites}};
+inline const program::Choices<Topology> kTopologies{
+    {"one-controller", Topology::one_controller}, {"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
 inline const program::Choices<fw::MotionVelocity> kMotionVelocities{{"difference", fw::MotionVelocity::difference},
                                                                     {"estimate", fw::MotionVelocity::estimate}};
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};

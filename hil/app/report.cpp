@@ -43,6 +43,18 @@ std::string scenario_name(ScenarioKind kind) {
   return "?";
 }
 
+std::string topology_name(Topology t) {
+  switch (t) {
+    case Topology::one_controller:
+      return "one-controller";
+    case Topology::one_site:
+      return "one-site";
+    case Topology::two_sites:
+      return "two-sites";
+  }
+  return "?";
+}
+
 std::string trace_csv_header() {
   return "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,"
          "hsi_torque,top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
@@ -66,7 +78,7 @@ nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
 nlohmann::json parameters_json(const SimConfig& config) {
   return {{"velocity", codec_json(config.velocity_codec)},
           {"force", codec_json(config.force_codec)},
-          {"topology", config.topology == Topology::one_site ? "one-site" : "two-sites"},
+          {"topology", topology_name(config.topology)},
           {"delay_ms", config.network.delay_ms},
           {"jitter_ms", config.network.jitter_ms},
           {"loss", config.network.loss},

@@ -99,8 +99,9 @@ void add_codec_options(CLI::App& cmd, RunOptions& o) {
 // The transport between the levers and the firmware's watchdog and rest repeat.
 void add_link_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--topology", o.config.topology,
-                 "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
-                 "over the network)")
+                 "one-controller (both levers in one controller, the paper's PC: a sample reaches the other lever in "
+                 "its own tick), one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by "
+                 "lever-bridges over the network)")
       ->transform(program::one_of(kTopologies))
       ->default_str("two-sites");
   cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
@@ -234,9 +235,18 @@ SimConfig run_config(const RunOptions& o) {
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);
   const auto& n = c.network;
-  if (c.topology == Topology::one_site && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
+  const char* no_network = c.topology == Topology::one_site         ? "one site has no network"
+                           : c.topology == Topology::one_controller ? "one controller has no network"
+                                                                    : nullptr;
+  if (no_network && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
     throw std::invalid_argument(
-        "--delay-ms, --jitter-ms and --loss need --topology two-sites: one site has no network");
+        fmt::format("--delay-ms, --jitter-ms and --loss need --topology two-sites: {}", no_network));
+  if (c.topology == Topology::one_controller)
+    for (const auto& f : c.faults)
+      if (f.kind == FaultKind::link_down || f.kind == FaultKind::burst_loss || f.kind == FaultKind::delay_step ||
+          f.kind == FaultKind::bus_off)
+        throw std::invalid_argument(
+            fmt::format("fault '{}' needs a bus or a link: one controller has neither", program::printable(f.text)));
 
   c.record_trace = !o.trace.empty();
   return c;

@@ -47,7 +47,7 @@ std::string trace_csv_row(const SphereTraceRow& row) {
 SphereConfig sphere_config_from(const SimConfig& run) {
   if (!run.faults.empty())
     throw std::invalid_argument("sphere-3dof has no levers: --fault applies to the lever scenarios only");
-  if (run.topology == Topology::one_site)
+  if (run.topology != Topology::two_sites)
     throw std::invalid_argument("sphere-3dof has no CAN sites: its two PCs talk over a LAN (--delay-ms, --jitter-ms)");
   SphereConfig c;
   c.duration_s = run.duration_s;

@@ -179,6 +179,10 @@ expect 2 "a fault after the end of the run" "fault 'bus-off@30' starts at 30 s, 
 expect 2 "a fault at the very end" "starts at 2 s, after the run's 2 s" "$hil" run --duration 2 --fault bus-off@2
 expect 2 "a delay step of 1e300 ms" "is over 60000" "$hil" run --fault delay-step@1:1e300
 expect 2 "a fault start of nan" "is not a non-negative number" "$hil" run --fault link-down@nan
+expect 2 "a network delay in one controller" "one controller has no network" \
+  "$hil" run --topology one-controller --delay-ms 5
+expect 2 "a link fault in one controller" "fault 'link-down@1' needs a bus or a link: one controller has neither" \
+  "$hil" run --topology one-controller --fault link-down@1
 run "$hil" run --duration 2 --fault link-down@1+0.2 --json
 check "a good fault still runs: exit 0" test "$code" -eq 0
 

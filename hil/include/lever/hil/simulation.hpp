@@ -38,9 +38,10 @@ struct SimView {
 
 struct TraceRow;
 
-// Where the levers are: both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
+// Where the levers are: both in one controller (the paper's single PC: no bus, each tick's samples reach the other
+// lever in that tick), both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
 // over an IP link (the network parameters apply only there).
-enum class Topology { one_site, two_sites };
+enum class Topology { one_controller, one_site, two_sites };
 
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
