@@ -78,8 +78,9 @@ class HsiRole {
   }
 
   std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
-    const double velocity =
-        motion_velocity_ == MotionVelocity::difference ? t.velocity_difference_rad_s : t.velocity_rad_s;
+    const double velocity = motion_velocity_ == MotionVelocity::difference        ? t.velocity_difference_rad_s
+                            : motion_velocity_ == MotionVelocity::adaptive_window ? t.velocity_window_rad_s
+                                                                                  : t.velocity_rad_s;
     const auto out = sender_.offer(now, velocity);
     if (!out.send) return std::nullopt;
     bool position_saturated = false;

@@ -39,6 +39,7 @@ class Lever {
         counter_(config.counter_bits),
         position_(config.counts_per_rev, config.homing.method == HomingMethod::absolute),
         velocity_(config.velocity),
+        window_(config.adaptive_window),
         gauge_(config.gauge),
         homing_(config.homing),
         timing_(config.timing),
@@ -181,6 +182,9 @@ class Lever {
     if (dt > 0.0) {
       telemetry_.velocity_rad_s = velocity_.update(raw_angle, dt);
       telemetry_.velocity_difference_rad_s = (raw_angle - previous_raw_angle_) / dt;
+      if (config_.motion_velocity == MotionVelocity::adaptive_window)
+        telemetry_.velocity_window_rad_s =
+            window_.update(position_.counts(), now) * (position_.rad_per_count() / kSecondsPerTick);
     }
     previous_raw_angle_ = raw_angle;
     if (uses_gauge_) telemetry_.force_n = gauge_.update(hal_.force().latest(), now);
@@ -425,6 +429,7 @@ class Lever {
   CounterUnwrapper counter_;
   EncoderPosition position_;
   VelocityEstimator velocity_;
+  AdaptiveWindowVelocity window_;
   StrainGauge gauge_;
   Homing homing_;
   StepTiming timing_;

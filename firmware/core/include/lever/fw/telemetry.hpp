@@ -24,6 +24,7 @@ struct LeverTelemetry {
   bool position_valid = false;
   double velocity_rad_s = 0.0;             // the tracking estimate: smooth, for damping and control
   double velocity_difference_rad_s = 0.0;  // the quantized position's backward difference: exactly 0 at rest
+  double velocity_window_rad_s = 0.0;      // its adaptive-window difference (0 unless the HSI sends it)
   std::optional<double> force_n;           // own strain gauge, calibrated; empty when stale
   // Reconstructed peer value: HSI velocity at the TOP, force at the HSI (after the passivity controller's scale).
   std::optional<double> remote;
