@@ -15,8 +15,13 @@ inline const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind
                                                        {"sphere-3dof", ScenarioKind::sphere_3dof}};
 inline const program::Choices<Topology> kTopologies{
     {"one-controller", Topology::one_controller}, {"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
-inline const program::Choices<fw::MotionVelocity> kMotionVelocities{{"difference", fw::MotionVelocity::difference},
-                                                                    {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
+    {"difference", fw::MotionVelocity::difference},
+    {"adaptive-window", fw::MotionVelocity::adaptive_window},
+    {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
+inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events", EncoderInterface::gpio_events},
+                                                                   {"counter", EncoderInterface::counter}};
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
 inline const program::Choices<fw::PassivityMode> kPassivity{
     {"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}};

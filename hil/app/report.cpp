@@ -43,6 +43,18 @@ std::string scenario_name(ScenarioKind kind) {
   return "?";
 }
 
+const char* motion_velocity_name(fw::MotionVelocity v) {
+  switch (v) {
+    case fw::MotionVelocity::difference:
+      return "difference";
+    case fw::MotionVelocity::adaptive_window:
+      return "adaptive-window";
+    case fw::MotionVelocity::estimate:
+      return "estimate";
+  }
+  return "?";
+}
+
 std::string topology_name(Topology t) {
   switch (t) {
     case Topology::one_controller:
@@ -90,6 +102,10 @@ nlohmann::json parameters_json(const SimConfig& config) {
           {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},
           {"passivity_drift_gain_per_s", config.top_firmware.passivity.drift_gain_per_s},
           {"homing", config.homing},
+          {"hsi_force_loop", config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor},
+          {"encoder_counts_per_turn", config.hsi_firmware.counts_per_rev},
+          {"encoder_interface", config.encoder_interface == EncoderInterface::counter ? "counter" : "gpio-events"},
+          {"motion_velocity", motion_velocity_name(config.hsi_firmware.motion_velocity)},
           {"jnd", config.jnd},
           {"jnd_absolute_n", config.jnd_absolute_n},
           {"substeps", config.substeps},
@@ -132,6 +148,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"position_rmse", r.position_rmse_rad},
       {"force_rmse", r.force_rmse_n},
       {"force_jnd_violation", r.force_jnd_violation},
+      {"hand_force_rmse", r.hand_force_rmse_n},
+      {"hand_jnd_violation", r.hand_jnd_violation},
       {"force_distortion_by_cause",
        {{"link", r.force_jnd_violation_link},
         {"codec", r.force_jnd_violation_codec},
@@ -190,6 +208,9 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
       "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
       100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
       100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
+  fmt::print(out,
+             "  the hand's force against the measured: rmse {:.3f} N, off by more than a JND {:.1f} % of the time\n",
+             r.hand_force_rmse_n, 100 * r.hand_jnd_violation);
   fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);

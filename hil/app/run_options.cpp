@@ -77,8 +77,9 @@ void add_codec_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
       ->check(program::number(program::kWeberFraction));
   cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
-                 "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
-                 "estimate (its smooth velocity estimate)")
+                 "what the HSI sends: difference (the quantized position's backward difference over one tick, the "
+                 "paper's), adaptive-window (the same over the longest window up to 20 ms that fits the counts "
+                 "within one) or estimate (its smooth velocity estimate)")
       ->transform(program::one_of(kMotionVelocities))
       ->default_str("difference");
   cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
@@ -148,6 +149,29 @@ void add_passivity_options(CLI::App& cmd, RunOptions& o) {
       ->default_str(fmt::format("{}", fw::PassivityConfig{}.drift_gain_per_s));
 }
 
+// The HSI's force display: open loop (the firmware's default), or the paper's force control loop on its own gauge.
+void add_display_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--hsi-force-loop", o.hsi_force_loop,
+                 "the HSI's force control loop on its own strain gauge, the received force as its set value (the "
+                 "paper's IV-A-1): on or off (open loop, the firmware's default)")
+      ->transform(program::one_of(kOnOff))
+      ->default_str("off");
+}
+
+// Both levers' encoders.
+void add_encoder_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--encoder-counts", o.encoder_counts,
+                 "encoder counts per turn, both levers (16384: 4096 lines read x4; 205887.4: 16 bits over the "
+                 "levers' 2 rad range)")
+      ->check(program::number({1024.0, 1e7, false, false, "a number of counts per turn"}))
+      ->default_str(fmt::format("{}", fw::LeverConfig{}.counts_per_rev));
+  cmd.add_option("--encoder-interface", o.config.encoder_interface,
+                 "how the controllers read their encoders: gpio-events (libgpiod's edge queues, the project's board) "
+                 "or counter (a hardware counter, no queue)")
+      ->transform(program::one_of(kEncoderInterfaces))
+      ->default_str("gpio-events");
+}
+
 // Homing and injected faults.
 void add_homing_and_fault_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_flag("--no-homing", o.no_homing,
@@ -200,6 +224,8 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   add_codec_options(cmd, o);
   add_link_options(cmd, o);
   add_passivity_options(cmd, o);
+  add_encoder_options(cmd, o);
+  add_display_options(cmd, o);
   add_homing_and_fault_options(cmd, o);
   add_gauge_options(cmd, o);
   add_output_options(cmd, o);
@@ -211,6 +237,9 @@ SimConfig run_config(const RunOptions& o) {
                       o.filter_hz_velocity.value_or(o.filter_hz)};
   c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
                    o.filter_hz_force.value_or(o.filter_hz)};
+  set_hsi_force_loop(c, o.hsi_force_loop);
+  c.hsi_firmware.counts_per_rev = o.encoder_counts;
+  c.top_firmware.counts_per_rev = o.encoder_counts;
   c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);

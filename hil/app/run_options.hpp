@@ -20,6 +20,8 @@ struct RunOptions {
   std::optional<double> p_velocity, p_force;
   double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
   double comms_timeout_ms = static_cast<double>(fw::LeverConfig{}.comms_timeout);
+  double encoder_counts = fw::LeverConfig{}.counts_per_rev;
+  bool hsi_force_loop = false;
   double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);
   bool no_homing = false;
   fw::PassivityMode passivity = fw::PassivityMode::off;

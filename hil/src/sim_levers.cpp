@@ -47,6 +47,8 @@ SimLevers::SimLevers(const SimConfig& config, const PowerUpAngles& angles, Trans
                                              now, tx_delay);
   top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, config.gauge, config.seed * 4 + 4,
                                              transport.top_bus(), now, tx_delay);
+  if (config.encoder_interface == EncoderInterface::counter)
+    for (SimHal* hal : {&hsi_->hal, &top_->hal}) hal->encoder_.set_queue_capacity(QuadratureEncoder::kMaxQueue);
   // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
   hsi_gauge_used_ = hsi_fw.use_force_sensor && hsi_fw.display.closed_loop;
 }
