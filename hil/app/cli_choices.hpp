@@ -4,6 +4,7 @@
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/simulation.hpp"
+#include "lever/hil/sphere3dof.hpp"
 #include "lever/program/choices.hpp"
 #include "sweep.hpp"
 
@@ -19,6 +20,8 @@ inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
     {"difference", fw::MotionVelocity::difference},
     {"adaptive-window", fw::MotionVelocity::adaptive_window},
     {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<SphereVelocityChain> kDeviceVelocities{{"driver", SphereVelocityChain::driver},
+                                                                     {"difference", SphereVelocityChain::difference}};
 inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
 inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events", EncoderInterface::gpio_events},
                                                                    {"counter", EncoderInterface::counter}};

@@ -139,7 +139,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
 int run_command(const RunOptions& o) {
   SimConfig config = run_config(o);
   if (config.scenario == ScenarioKind::sphere_3dof)
-    return run_sphere_command(sphere_config_from(config), o.json, o.trace);
+    return run_sphere_command(sphere_config_from(config, o), o.json, o.trace);
   // The trace streams to its file as the run goes: an hour of it is 1 GB, never held whole.
   std::optional<program::OutputFile> trace;
   if (!o.trace.empty()) {

@@ -158,6 +158,19 @@ void add_display_options(CLI::App& cmd, RunOptions& o) {
       ->default_str("off");
 }
 
+// The sphere's device: how its driver gives the velocity.
+void add_device_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--device-velocity", o.device_velocity,
+                 "sphere-3dof: the velocity the OP reads, driver (the PHANToM Omni ROS driver's chain: second-order "
+                 "backward difference, third-order Butterworth low-pass) or difference (one tick of the quantized "
+                 "position)")
+      ->transform(program::one_of(kDeviceVelocities))
+      ->default_str("driver");
+  cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
+      ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
+      ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
+}
+
 // Both levers' encoders.
 void add_encoder_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--encoder-counts", o.encoder_counts,
@@ -165,7 +178,7 @@ void add_encoder_options(CLI::App& cmd, RunOptions& o) {
                  "levers' 2 rad range)")
       ->check(program::number({1024.0, 1e7, false, false, "a number of counts per turn"}))
       ->default_str(fmt::format("{}", fw::LeverConfig{}.counts_per_rev));
-  cmd.add_option("--encoder-interface", o.config.encoder_interface,
+  cmd.add_option("--encoder-interface", o.encoder_interface,
                  "how the controllers read their encoders: gpio-events (libgpiod's edge queues, the project's board) "
                  "or counter (a hardware counter, no queue)")
       ->transform(program::one_of(kEncoderInterfaces))
@@ -226,9 +239,20 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   add_passivity_options(cmd, o);
   add_encoder_options(cmd, o);
   add_display_options(cmd, o);
+  add_device_options(cmd, o);
   add_homing_and_fault_options(cmd, o);
   add_gauge_options(cmd, o);
   add_output_options(cmd, o);
+}
+
+std::string misplaced_options(const RunOptions& o) {
+  const bool sphere = o.config.scenario == ScenarioKind::sphere_3dof;
+  if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
+    return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
+           "no levers)";
+  if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
+    return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
+  return {};
 }
 
 SimConfig run_config(const RunOptions& o) {
@@ -237,9 +261,11 @@ SimConfig run_config(const RunOptions& o) {
                       o.filter_hz_velocity.value_or(o.filter_hz)};
   c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
                    o.filter_hz_force.value_or(o.filter_hz)};
-  set_hsi_force_loop(c, o.hsi_force_loop);
-  c.hsi_firmware.counts_per_rev = o.encoder_counts;
-  c.top_firmware.counts_per_rev = o.encoder_counts;
+  if (const auto m = misplaced_options(o); !m.empty()) throw std::invalid_argument(m);
+  set_hsi_force_loop(c, o.hsi_force_loop.value_or(false));
+  c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev =
+      o.encoder_counts.value_or(c.hsi_firmware.counts_per_rev);
+  c.encoder_interface = o.encoder_interface.value_or(c.encoder_interface);
   c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);

@@ -15,13 +15,11 @@ SphereOp::SphereOp(const SphereConfig& c, const Vec3& start, const SphereDelays&
       velocity_sender_(c.velocity_codec),
       force_receiver_(c.force_codec.mode),
       measured_(quantize(start, c.device.resolution_m)),
-      measured_prev_(measured_) {}
+      velocity_(c, measured_) {}
 
 void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
   measured_ = quantize(position, c_.device.resolution_m);
-  for (std::size_t i = 0; i < 3; ++i) velocity_[i] = (measured_[i] - measured_prev_[i]) / kTick;
-  measured_prev_ = measured_;
-  const auto vd = velocity_sender_.offer(t, velocity_);
+  const auto vd = velocity_sender_.offer(t, velocity_.update(measured_));
   velocity_sent_ = vd.send;
   if (vd.send) {
     ++packets_;

@@ -1,5 +1,6 @@
 // sphere-3dof, the paper's 3-DoF experiment (IV-B): the environment's force is eq. (11), the device's
-// velocity is the backward difference of its quantized position, runs repeat per seed, the metric sees no
+// velocity is its driver's chain (test_device_velocity.cpp) or the backward difference of its quantized position,
+// runs repeat per seed, the metric sees no
 // distortion where the codec makes none, fewer packets for a wider deadband, and the documented table stays
 // within its spread over seeds (tests/hil/sphere_3dof_bounds.json, written by scripts/hil-regression-bounds-sphere).
 #include <catch2/catch.hpp>
@@ -61,9 +62,11 @@ TEST_CASE("the environment's force is Hooke's law on the penetration, along cent
   CHECK(outside > 500);
 }
 
-TEST_CASE("the device's velocity is the backward difference of its quantized position, exactly zero at rest",
+TEST_CASE("the difference chain is the backward difference of the quantized position, exactly zero at rest",
           "[hil][sphere]") {
-  SECTION("a hand that holds still: every sample is exactly zero, and only the first is sent") {
+  SphereConfig difference;
+  difference.velocity_chain = SphereVelocityChain::difference;
+  SECTION("a hand that holds still: every sample is exactly zero, and only the first is sent, with either chain") {
     SphereConfig c = traced(SphereConfig{}, 2.0);
     c.hand.explore = false;
     c.hand.tremor_rms_m = 0.0;
@@ -71,9 +74,13 @@ TEST_CASE("the device's velocity is the backward difference of its quantized pos
     for (const auto& row : r.trace) REQUIRE(same(row.velocity, Vec3{}));
     CHECK(r.zero_velocity_share == 1.0);
     CHECK(r.velocity_packets == 1u);
+    c.velocity_chain = SphereVelocityChain::difference;
+    const auto d = run_sphere(c);
+    CHECK(d.zero_velocity_share == 1.0);
+    CHECK(d.velocity_packets == 1u);
   }
   SECTION("a hand that holds still but trembles: the tip moves inside its cell, the velocity stays exactly zero") {
-    SphereConfig c = traced(SphereConfig{}, 2.0);
+    SphereConfig c = traced(difference, 2.0);
     c.hand.explore = false;
     const auto r = run_sphere(c);
     int moved_in_cell = 0;
@@ -86,7 +93,7 @@ TEST_CASE("the device's velocity is the backward difference of its quantized pos
     CHECK(moved_in_cell > 1000);  // a velocity from the true position would not be zero here
   }
   SECTION("exploring: each sample is (q_k - q_{k-1}) / 1 ms of the quantized positions, zero when they repeat") {
-    const auto r = run_sphere(traced(SphereConfig{}, 10.0));
+    const auto r = run_sphere(traced(difference, 10.0));
     const double resolution = OmniParams{}.resolution_m;
     int repeats = 0;
     for (std::size_t k = 1; k < r.trace.size(); ++k) {

@@ -49,11 +49,15 @@ struct SphereParams {
   double stiffness = 1000.0;  // N/m, u of eq. (11): about the Omni's stiffest axis-wise bound (Z, 1.02 N/mm)
 };
 
+// How the OP reads the device's velocity (docs/hil-model.md): as the PHANToM Omni ROS driver gives it (a second-order
+// backward difference and a third-order Butterworth low-pass), or the one-tick difference of the quantized position.
+enum class SphereVelocityChain : std::uint8_t { driver, difference };
+
 struct SphereTraceRow {
   double t = 0.0;
   Vec3 position{};  // the device's tip (true)
   Vec3 measured{};  // quantized to the device's resolution
-  Vec3 velocity{};  // backward difference of measured, the value offered to the codec
+  Vec3 velocity{};  // the velocity the OP reads (its chain on measured), the value offered to the codec
   bool velocity_sent = false;
   bool top_has_position = false;
   Vec3 top_position{};       // the TOP's extrapolated user position
@@ -71,6 +75,8 @@ struct SphereConfig {
   // A switched 100 Mbit/s Ethernet LAN; it never reorders (reorder is ignored: the LAN is FIFO).
   NetworkParams network{0.2, 0.1, 0.0, false};
   OmniParams device{};
+  SphereVelocityChain velocity_chain = SphereVelocityChain::driver;
+  double driver_cutoff_hz = 20.0;  // the driver's low-pass (the ROS driver's 20 Hz)
   HandParams hand{};
   SphereParams sphere{};
   double jnd = 0.1;              // Weber fraction of the distortion metric
