@@ -12,8 +12,9 @@ constexpr double kTick = 1e-3;
 SphereOp::SphereOp(const SphereConfig& c, const Vec3& start, const SphereDelays& delays)
     : c_(c),
       down_ticks_(delays.down_ticks),
-      velocity_sender_(c.velocity_codec),
-      force_receiver_(c.force_codec.mode),
+      velocity_sender_(c.velocity_codec, sphere_velocity_wire()),
+      force_receiver_(c.force_codec.mode, sphere_force_wire(c.device)),
+      position_wire_(sphere_position_wire(c.device)),
       measured_(quantize(start, c.device.resolution_m)),
       velocity_(c, measured_) {}
 
@@ -23,7 +24,10 @@ void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
   velocity_sent_ = vd.send;
   if (vd.send) {
     ++packets_;
-    up.send({t, measured_, vd.wire}, t_ns);
+    UpPacket packet{t, {}, vd.wire};
+    bool clipped = false;
+    for (std::size_t i = 0; i < 3; ++i) packet.position[i] = position_wire_.encode(measured_[i], clipped);
+    up.send(packet, t_ns);
   }
 }
 

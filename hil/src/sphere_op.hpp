@@ -27,8 +27,9 @@ class SphereOp {
  private:
   const SphereConfig& c_;
   int down_ticks_;
-  codec::DeadbandSender<double, 3> velocity_sender_;
-  codec::DeadbandReceiver<double, 3> force_receiver_;
+  SphereSender velocity_sender_;
+  SphereReceiver force_receiver_;
+  SphereWire position_wire_;
   Vec3 measured_, displayed_{};
   DeviceVelocity velocity_;
   bool velocity_sent_ = false;

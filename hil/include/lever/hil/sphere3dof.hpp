@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lever/codec/config.hpp"
+#include "lever/codec/quantizer.hpp"
 #include "lever/common/vec.hpp"
 #include "lever/hil/network.hpp"
 
@@ -120,6 +121,14 @@ struct SphereResult {
   double wall_time_s = 0.0;
   std::vector<SphereTraceRow> trace;
 };
+
+// 16 bits per DoF on the link (the paper's section I; docs/hil-model.md, "16 bits per DoF on the wire"): each
+// component a 16-bit integer, rounded to nearest, clipped at its range. The position at the device's own grid
+// (it goes over exactly), the velocity at 0.1 mm/s (+-3.28 m/s), the force at the device's peak over 32767.
+using SphereWire = codec::FixedPointQuantizer<double, std::int16_t>;
+inline SphereWire sphere_position_wire(const OmniParams& device) { return {device.resolution_m}; }
+inline SphereWire sphere_velocity_wire() { return {1e-4}; }
+inline SphereWire sphere_force_wire(const OmniParams& device) { return {device.max_force_n / 32767.0}; }
 
 // Eq. (11): zero outside the sphere (and at its centre), else u (r - |x - s|) along (x - s)/|x - s|.
 Vec3 sphere_force(const SphereParams& sphere, const Vec3& x);
