@@ -4,6 +4,7 @@
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/simulation.hpp"
+#include "lever/hil/sphere3dof.hpp"
 #include "lever/program/choices.hpp"
 #include "sweep.hpp"
 
@@ -13,10 +14,17 @@ inline const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind
                                                        {"free-motion", ScenarioKind::free_motion},
                                                        {"press-hold", ScenarioKind::press_hold},
                                                        {"sphere-3dof", ScenarioKind::sphere_3dof}};
-inline const program::Choices<Topology> kTopologies{{"one-site", Topology::one_site},
-                                                    {"two-sites", Topology::two_sites}};
-inline const program::Choices<fw::MotionVelocity> kMotionVelocities{{"difference", fw::MotionVelocity::difference},
-                                                                    {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<Topology> kTopologies{
+    {"one-controller", Topology::one_controller}, {"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
+inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
+    {"difference", fw::MotionVelocity::difference},
+    {"adaptive-window", fw::MotionVelocity::adaptive_window},
+    {"estimate", fw::MotionVelocity::estimate}};
+inline const program::Choices<SphereVelocityChain> kDeviceVelocities{{"driver", SphereVelocityChain::driver},
+                                                                     {"difference", SphereVelocityChain::difference}};
+inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
+inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events", EncoderInterface::gpio_events},
+                                                                   {"counter", EncoderInterface::counter}};
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
 inline const program::Choices<fw::PassivityMode> kPassivity{
     {"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}};

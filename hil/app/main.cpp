@@ -35,6 +35,8 @@ struct SweepCommand {
   CLI::App* app = nullptr;
   CLI::Option* delays = nullptr;  // --over delay's own options
   CLI::Option* p = nullptr;
+  CLI::Option* topology = nullptr;  // the lever p sweeps' own options
+  CLI::Option* force_loop = nullptr;
 };
 
 SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
@@ -79,6 +81,17 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
                    "1 kHz, beyond the loop's Nyquist")
       ->check(program::number(program::kCutoffAt1kHz))
       ->default_str("0");
+  cmd.topology = cmd.app
+                     ->add_option("--topology", o.topology,
+                                  "lever sweeps over p: one-controller (the paper's PC), one-site or two-sites")
+                     ->transform(program::one_of(kTopologies))
+                     ->default_str("one-controller");
+  cmd.force_loop = cmd.app
+                       ->add_option("--hsi-force-loop", o.hsi_force_loop,
+                                    "lever sweeps over p: the HSI's force control loop on its own gauge (the paper's), "
+                                    "on or off")
+                       ->transform(program::one_of(kOnOff))
+                       ->default_str("on");
 
   return cmd;
 }
@@ -126,7 +139,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
 int run_command(const RunOptions& o) {
   SimConfig config = run_config(o);
   if (config.scenario == ScenarioKind::sphere_3dof)
-    return run_sphere_command(sphere_config_from(config), o.json, o.trace);
+    return run_sphere_command(sphere_config_from(config, o), o.json, o.trace);
   // The trace streams to its file as the run goes: an hour of it is 1 GB, never held whole.
   std::optional<program::OutputFile> trace;
   if (!o.trace.empty()) {
@@ -159,6 +172,9 @@ int serve_command(const ServeOptions& o) {
 
 int sweep_command(const SweepOptions& o, const SweepCommand& cmd) {
   if (o.over == SweepAxis::delay) {
+    if (cmd.topology->count() > 0 || cmd.force_loop->count() > 0)
+      throw std::invalid_argument(
+          "--topology and --hsi-force-loop belong to sweep --over p (--over delay runs two sites, open loop)");
     if (o.scenario != ScenarioKind::wall_tap)
       throw std::invalid_argument("sweep --over delay runs wall-tap only (the contact is what delay destabilizes)");
     auto sorted = o.delays_ms;
@@ -169,7 +185,12 @@ int sweep_command(const SweepOptions& o, const SweepCommand& cmd) {
   }
   if (cmd.delays->count() > 0 || cmd.p->count() > 0)
     throw std::invalid_argument("--delays-ms and --p belong to sweep --over delay (--over p sweeps p itself)");
-  if (o.scenario == ScenarioKind::sphere_3dof) return run_sphere_sweep(o);
+  if (o.scenario == ScenarioKind::sphere_3dof) {
+    if (cmd.topology->count() > 0 || cmd.force_loop->count() > 0)
+      throw std::invalid_argument(
+          "--topology and --hsi-force-loop belong to the lever scenarios (sphere-3dof has none)");
+    return run_sphere_sweep(o);
+  }
   return run_sweep(o);
 }
 

@@ -43,6 +43,30 @@ std::string scenario_name(ScenarioKind kind) {
   return "?";
 }
 
+const char* motion_velocity_name(fw::MotionVelocity v) {
+  switch (v) {
+    case fw::MotionVelocity::difference:
+      return "difference";
+    case fw::MotionVelocity::adaptive_window:
+      return "adaptive-window";
+    case fw::MotionVelocity::estimate:
+      return "estimate";
+  }
+  return "?";
+}
+
+std::string topology_name(Topology t) {
+  switch (t) {
+    case Topology::one_controller:
+      return "one-controller";
+    case Topology::one_site:
+      return "one-site";
+    case Topology::two_sites:
+      return "two-sites";
+  }
+  return "?";
+}
+
 std::string trace_csv_header() {
   return "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,"
          "hsi_torque,top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
@@ -66,7 +90,7 @@ nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
 nlohmann::json parameters_json(const SimConfig& config) {
   return {{"velocity", codec_json(config.velocity_codec)},
           {"force", codec_json(config.force_codec)},
-          {"topology", config.topology == Topology::one_site ? "one-site" : "two-sites"},
+          {"topology", topology_name(config.topology)},
           {"delay_ms", config.network.delay_ms},
           {"jitter_ms", config.network.jitter_ms},
           {"loss", config.network.loss},
@@ -78,6 +102,10 @@ nlohmann::json parameters_json(const SimConfig& config) {
           {"passivity_display_spend_s", config.hsi_firmware.passivity.display_spend_time_s},
           {"passivity_drift_gain_per_s", config.top_firmware.passivity.drift_gain_per_s},
           {"homing", config.homing},
+          {"hsi_force_loop", config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor},
+          {"encoder_counts_per_turn", config.hsi_firmware.counts_per_rev},
+          {"encoder_interface", config.encoder_interface == EncoderInterface::counter ? "counter" : "gpio-events"},
+          {"motion_velocity", motion_velocity_name(config.hsi_firmware.motion_velocity)},
           {"jnd", config.jnd},
           {"jnd_absolute_n", config.jnd_absolute_n},
           {"substeps", config.substeps},
@@ -111,9 +139,17 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"seed", config.seed},
       {"velocity_packet_rate", r.velocity_packet_rate},
       {"force_packet_rate", r.force_packet_rate},
+      {"velocity_deadband_rate", r.velocity_deadband_rate},
+      {"velocity_refresh_rate", r.velocity_refresh_rate},
+      {"velocity_rest_repeat_rate", r.velocity_rest_repeat_rate},
+      {"force_deadband_rate", r.force_deadband_rate},
+      {"force_refresh_rate", r.force_refresh_rate},
+      {"force_rest_repeat_rate", r.force_rest_repeat_rate},
       {"position_rmse", r.position_rmse_rad},
       {"force_rmse", r.force_rmse_n},
       {"force_jnd_violation", r.force_jnd_violation},
+      {"hand_force_rmse", r.hand_force_rmse_n},
+      {"hand_jnd_violation", r.hand_jnd_violation},
       {"force_distortion_by_cause",
        {{"link", r.force_jnd_violation_link},
         {"codec", r.force_jnd_violation_codec},
@@ -159,6 +195,11 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
   fmt::print(out,
+             "    of which the deadband's (the paper's count): velocity {:.1f} %, force {:.1f} %; refresh {:.1f} % and "
+             "{:.1f} %; rest repeat {:.1f} % and {:.1f} %\n",
+             100 * r.velocity_deadband_rate, 100 * r.force_deadband_rate, 100 * r.velocity_refresh_rate,
+             100 * r.force_refresh_rate, 100 * r.velocity_rest_repeat_rate, 100 * r.force_rest_repeat_rate);
+  fmt::print(out,
              "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);
   fmt::print(
@@ -167,6 +208,9 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
       "{:.1f} %; prefilter alone {:.1f} % (its lag {:.1f} ms)\n",
       100 * r.force_jnd_violation_link, r.nominal_delay_ticks, 100 * r.force_jnd_violation_codec,
       100 * r.force_jnd_violation_filter, r.prefilter_delay_ms);
+  fmt::print(out,
+             "  the hand's force against the measured: rmse {:.3f} N, off by more than a JND {:.1f} % of the time\n",
+             r.hand_force_rmse_n, 100 * r.hand_jnd_violation);
   fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average; bus load {:.1f} %; {:.0f}x real time\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * std::max(r.bus_load_hsi, r.bus_load_top),
              r.realtime_factor);

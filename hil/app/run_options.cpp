@@ -77,8 +77,9 @@ void add_codec_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
       ->check(program::number(program::kWeberFraction));
   cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
-                 "what the HSI sends: difference (the quantized position's backward difference, the paper's) or "
-                 "estimate (its smooth velocity estimate)")
+                 "what the HSI sends: difference (the quantized position's backward difference over one tick, the "
+                 "paper's), adaptive-window (the same over the longest window up to 20 ms that fits the counts "
+                 "within one) or estimate (its smooth velocity estimate)")
       ->transform(program::one_of(kMotionVelocities))
       ->default_str("difference");
   cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
@@ -99,8 +100,9 @@ void add_codec_options(CLI::App& cmd, RunOptions& o) {
 // The transport between the levers and the firmware's watchdog and rest repeat.
 void add_link_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--topology", o.config.topology,
-                 "one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by lever-bridges "
-                 "over the network)")
+                 "one-controller (both levers in one controller, the paper's PC: a sample reaches the other lever in "
+                 "its own tick), one-site (both levers on one CAN bus) or two-sites (each on its own bus, joined by "
+                 "lever-bridges over the network)")
       ->transform(program::one_of(kTopologies))
       ->default_str("two-sites");
   cmd.add_option("--delay-ms", o.config.network.delay_ms, "one-way network delay")
@@ -145,6 +147,42 @@ void add_passivity_options(CLI::App& cmd, RunOptions& o) {
                  "under tdpa, the rate at which the TOP's reference is pulled toward the HSI's position, 1/s")
       ->check(program::number(kDriftGain))
       ->default_str(fmt::format("{}", fw::PassivityConfig{}.drift_gain_per_s));
+}
+
+// The HSI's force display: open loop (the firmware's default), or the paper's force control loop on its own gauge.
+void add_display_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--hsi-force-loop", o.hsi_force_loop,
+                 "the HSI's force control loop on its own strain gauge, the received force as its set value (the "
+                 "paper's IV-A-1): on or off (open loop, the firmware's default)")
+      ->transform(program::one_of(kOnOff))
+      ->default_str("off");
+}
+
+// The sphere's device: how its driver gives the velocity.
+void add_device_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--device-velocity", o.device_velocity,
+                 "sphere-3dof: the velocity the OP reads, driver (the PHANToM Omni ROS driver's chain: second-order "
+                 "backward difference, third-order Butterworth low-pass) or difference (one tick of the quantized "
+                 "position)")
+      ->transform(program::one_of(kDeviceVelocities))
+      ->default_str("driver");
+  cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
+      ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
+      ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
+}
+
+// Both levers' encoders.
+void add_encoder_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--encoder-counts", o.encoder_counts,
+                 "encoder counts per turn, both levers (16384: 4096 lines read x4; 205887.4: 16 bits over the "
+                 "levers' 2 rad range)")
+      ->check(program::number({1024.0, 1e7, false, false, "a number of counts per turn"}))
+      ->default_str(fmt::format("{}", fw::LeverConfig{}.counts_per_rev));
+  cmd.add_option("--encoder-interface", o.encoder_interface,
+                 "how the controllers read their encoders: gpio-events (libgpiod's edge queues, the project's board) "
+                 "or counter (a hardware counter, no queue)")
+      ->transform(program::one_of(kEncoderInterfaces))
+      ->default_str("gpio-events");
 }
 
 // Homing and injected faults.
@@ -199,9 +237,22 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   add_codec_options(cmd, o);
   add_link_options(cmd, o);
   add_passivity_options(cmd, o);
+  add_encoder_options(cmd, o);
+  add_display_options(cmd, o);
+  add_device_options(cmd, o);
   add_homing_and_fault_options(cmd, o);
   add_gauge_options(cmd, o);
   add_output_options(cmd, o);
+}
+
+std::string misplaced_options(const RunOptions& o) {
+  const bool sphere = o.config.scenario == ScenarioKind::sphere_3dof;
+  if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
+    return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
+           "no levers)";
+  if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
+    return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
+  return {};
 }
 
 SimConfig run_config(const RunOptions& o) {
@@ -210,6 +261,11 @@ SimConfig run_config(const RunOptions& o) {
                       o.filter_hz_velocity.value_or(o.filter_hz)};
   c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
                    o.filter_hz_force.value_or(o.filter_hz)};
+  if (const auto m = misplaced_options(o); !m.empty()) throw std::invalid_argument(m);
+  set_hsi_force_loop(c, o.hsi_force_loop.value_or(false));
+  c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev =
+      o.encoder_counts.value_or(c.hsi_firmware.counts_per_rev);
+  c.encoder_interface = o.encoder_interface.value_or(c.encoder_interface);
   c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);
@@ -234,9 +290,18 @@ SimConfig run_config(const RunOptions& o) {
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);
   const auto& n = c.network;
-  if (c.topology == Topology::one_site && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
+  const char* no_network = c.topology == Topology::one_site         ? "one site has no network"
+                           : c.topology == Topology::one_controller ? "one controller has no network"
+                                                                    : nullptr;
+  if (no_network && (n.delay_ms > 0 || n.jitter_ms > 0 || n.loss > 0))
     throw std::invalid_argument(
-        "--delay-ms, --jitter-ms and --loss need --topology two-sites: one site has no network");
+        fmt::format("--delay-ms, --jitter-ms and --loss need --topology two-sites: {}", no_network));
+  if (c.topology == Topology::one_controller)
+    for (const auto& f : c.faults)
+      if (f.kind == FaultKind::link_down || f.kind == FaultKind::burst_loss || f.kind == FaultKind::delay_step ||
+          f.kind == FaultKind::bus_off)
+        throw std::invalid_argument(
+            fmt::format("fault '{}' needs a bus or a link: one controller has neither", program::printable(f.text)));
 
   c.record_trace = !o.trace.empty();
   return c;

@@ -8,6 +8,7 @@
 #include "lever/codec/config.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/simulation.hpp"
+#include "lever/hil/sphere3dof.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
 
 namespace lever::hil {
@@ -20,6 +21,12 @@ struct RunOptions {
   std::optional<double> p_velocity, p_force;
   double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
   double comms_timeout_ms = static_cast<double>(fw::LeverConfig{}.comms_timeout);
+  // Lever-only and sphere-only options, empty unless given: the other kind of scenario refuses them.
+  std::optional<double> encoder_counts;
+  std::optional<EncoderInterface> encoder_interface;
+  std::optional<bool> hsi_force_loop;
+  std::optional<SphereVelocityChain> device_velocity;
+  std::optional<double> driver_cutoff_hz;
   double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);
   bool no_homing = false;
   fw::PassivityMode passivity = fw::PassivityMode::off;
@@ -37,5 +44,7 @@ struct RunOptions {
 void add_run_options(CLI::App& cmd, RunOptions& o);
 // Throws program::BadInput or std::invalid_argument for options that do not go together.
 SimConfig run_config(const RunOptions& o);
+// The lever-only options a sphere-3dof run was given, or the sphere-only ones a lever run was: empty if none.
+std::string misplaced_options(const RunOptions& o);
 
 }  // namespace lever::hil

@@ -44,10 +44,10 @@ std::string trace_csv_row(const SphereTraceRow& row) {
 
 }  // namespace
 
-SphereConfig sphere_config_from(const SimConfig& run) {
+SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options) {
   if (!run.faults.empty())
     throw std::invalid_argument("sphere-3dof has no levers: --fault applies to the lever scenarios only");
-  if (run.topology == Topology::one_site)
+  if (run.topology != Topology::two_sites)
     throw std::invalid_argument("sphere-3dof has no CAN sites: its two PCs talk over a LAN (--delay-ms, --jitter-ms)");
   SphereConfig c;
   c.duration_s = run.duration_s;
@@ -58,6 +58,8 @@ SphereConfig sphere_config_from(const SimConfig& run) {
   c.network.jitter_ms = run.network.jitter_ms;
   c.network.loss = run.network.loss;
   c.record_trace = run.record_trace;
+  c.velocity_chain = options.device_velocity.value_or(c.velocity_chain);
+  c.driver_cutoff_hz = options.driver_cutoff_hz.value_or(c.driver_cutoff_hz);
   return c;
 }
 
@@ -86,6 +88,8 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"delay_ms", c.network.delay_ms},
         {"jitter_ms", c.network.jitter_ms},
         {"loss", c.network.loss},
+        {"device_velocity", c.velocity_chain == SphereVelocityChain::driver ? "driver" : "difference"},
+        {"driver_cutoff_hz", c.driver_cutoff_hz},
         {"jnd", c.jnd},
         {"jnd_absolute_n", c.jnd_absolute_n},
         {"substeps", c.substeps},

@@ -6,12 +6,13 @@
 
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
+#include "run_options.hpp"
 
 namespace lever::hil {
 
 // `lever-hil run`'s options as the sphere takes them: duration, seed, both codecs, the link. Lever-only options
 // that were given (faults) are refused.
-SphereConfig sphere_config_from(const SimConfig& run);
+SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options);
 
 nlohmann::json sphere_report_json(const SphereConfig& config, const SphereResult& result);
 

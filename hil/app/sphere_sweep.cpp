@@ -31,9 +31,24 @@ constexpr Variant kVariants[] = {
 constexpr SphereDirection kDirections[] = {SphereDirection::velocity, SphereDirection::force};
 const char* direction_name(SphereDirection d) { return d == SphereDirection::velocity ? "velocity" : "force"; }
 
+// The velocity the OP reads (docs/hil-model.md): the driver's chain at its 20 Hz, the default, then for the
+// velocity direction the one-tick difference and the driver at half and twice the cut-off.
+struct Chain {
+  const char* name;
+  SphereVelocityChain chain;
+  double cutoff_hz;
+};
+constexpr Chain kChains[] = {
+    {"driver 20 Hz", SphereVelocityChain::driver, 20.0},
+    {"difference", SphereVelocityChain::difference, 20.0},
+    {"driver 10 Hz", SphereVelocityChain::driver, 10.0},
+    {"driver 40 Hz", SphereVelocityChain::driver, 40.0},
+};
+
 struct Job {
   const Variant* variant;
   SphereDirection direction;
+  const Chain* chain;
   double p;
   std::uint64_t seed;
   SphereResult result;
@@ -67,15 +82,17 @@ const SweepMetric<SphereResult> kMetrics[] = {
     {{"realtime_factor", "{:.0f}", nullptr, 1, 0}, [](const SphereResult& r) { return r.realtime_factor; }},
 };
 
-// One direction's deadband: the rows of that direction, and in the packet rates the paper's points.
-PlotPanel panel(const char* direction, const std::string& title, const std::string& metric, bool paper = false) {
-  const std::string row = fmt::format("strcol(\"direction\") eq \"{}\"", direction);
+// One direction's deadband with one velocity chain: its rows, and in the packet rates the paper's points.
+PlotPanel panel(const char* direction, const std::string& title, const std::string& metric, bool paper = false,
+                const char* chain = kChains[0].name) {
+  const std::string direction_row = fmt::format("strcol(\"direction\") eq \"{}\"", direction);
+  const std::string row = fmt::format("{} && strcol(\"velocity_chain\") eq \"{}\"", direction_row, chain);
   PlotPanel p{title, "", "", row, {{metric, ""}}, ""};
   if (paper)
     p.extra = fmt::format(
         "for [i=1:3] paper using \"p_percent\":(({} && strcol(\"variant\") eq series(i)) ? column(\"rate_percent\") "
         ": 1/0) with points pt 7 ps 1.6 lc i title \"paper \".series(i)",
-        row);
+        direction_row);
   return p;
 }
 
@@ -93,11 +110,24 @@ PlotSpec plots(int seeds) {
   velocity_distortion.yrange = "[0:*]";
   PlotPanel position = panel("velocity", "", "position_rmse_um");
   position.ylabel = "position RMSE [um]";
+  PlotFigure chains{
+      "velocity_chains.png",
+      "1600,520",
+      "sphere-3dof: velocity packets OP -> TOP (deadband on velocity) by the velocity the OP reads" + spread,
+      {}};
+  for (const auto& chain : kChains) {
+    PlotPanel p = panel("velocity", chain.name, "velocity_rate_percent", true, chain.name);
+    p.ylabel = "packet rate [% of 1 kHz]";
+    p.yrange = "[0:100]";
+    chains.panels.push_back(p);
+  }
   s.figures = {
       {"fig12_packet_rates.png",
        "1200,520",
-       "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text)" + spread,
+       "sphere-3dof: packet rates (cf. the paper's Fig. 12; points: the paper's text); the driver's velocity at 20 Hz" +
+           spread,
        {velocity_rate, panel("force", "force TOP -> OP (deadband on force)", "force_rate_percent", true)}},
+      chains,
       {"distortion.png",
        "1200,520",
        "sphere-3dof: displayed force off the undistorted system's by more than a JND" + spread,
@@ -116,32 +146,39 @@ int run_sphere_sweep(const SweepOptions& o) {
 
   std::vector<Job> jobs;
   for (const auto direction : kDirections)
-    for (const auto& v : kVariants)
-      for (const double p : kPValues)
-        for (int s = 1; s <= o.seeds; ++s) jobs.push_back({&v, direction, p, static_cast<std::uint64_t>(s), {}});
+    for (const auto& chain : kChains) {
+      if (direction == SphereDirection::force && &chain != &kChains[0]) continue;
+      for (const auto& v : kVariants)
+        for (const double p : kPValues)
+          for (int s = 1; s <= o.seeds; ++s)
+            jobs.push_back({&v, direction, &chain, p, static_cast<std::uint64_t>(s), {}});
+    }
 
   run_in_parallel(
       jobs.size(), o.jobs, 50,
       [&](std::size_t i) {
         Job& job = jobs[i];
         SphereConfig c = sphere_variant(job.direction, job.variant->mode, job.variant->filter, job.p);
+        c.velocity_chain = job.chain->chain;
+        c.driver_cutoff_hz = job.chain->cutoff_hz;
         c.duration_s = o.duration_s;
         c.seed = job.seed;
         job.result = run_sphere(c);
       },
       [&](std::size_t i) {
         const Job& job = jobs[i];
-        return fmt::format("{} {} p={:.1f} % seed {}", direction_name(job.direction), job.variant->name, 100 * job.p,
-                           job.seed);
+        return fmt::format("{} {} ({}) p={:.1f} % seed {}", direction_name(job.direction), job.variant->name,
+                           job.chain->name, 100 * job.p, job.seed);
       });
 
-  SweepTable table("direction,variant,p", "direction,variant,p_percent", sweep_columns(kMetrics));
+  SweepTable table("direction,velocity_chain,variant,p", "direction,velocity_chain,variant,p_percent",
+                   sweep_columns(kMetrics));
   for (const Job& job : jobs) {
     const char* direction = direction_name(job.direction);
-    table.add_run(fmt::format("{},{},{}", direction, job.variant->name, job.p), job.seed,
+    table.add_run(fmt::format("{},{},{},{}", direction, job.chain->name, job.variant->name, job.p), job.seed,
                   sweep_values(kMetrics, job.result));
     if (job.seed == static_cast<std::uint64_t>(o.seeds))
-      table.end_point(fmt::format("{},{},{}", direction, job.variant->name, 100 * job.p));
+      table.end_point(fmt::format("{},{},{},{}", direction, job.chain->name, job.variant->name, 100 * job.p));
   }
   write_sweep(dir, table, gnuplot_script(plots(o.seeds)));
   program::OutputFile::write_all((dir / "paper_fig12.csv").string(), kPaperPoints, "--out");
@@ -149,7 +186,7 @@ int run_sphere_sweep(const SweepOptions& o) {
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(
       "sweep: {} runs of {} s ({} seeds per point) -> {}/summary.csv, sweep.csv, paper_fig12.csv, "
-      "fig12_packet_rates.png, distortion.png, position_error.png\n",
+      "fig12_packet_rates.png, velocity_chains.png, distortion.png, position_error.png\n",
       jobs.size(), o.duration_s, o.seeds, dir.string());
   return 0;
 }

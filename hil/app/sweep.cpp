@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <numbers>
 #include <vector>
 
 #include "lever/hil/simulation.hpp"
@@ -18,19 +19,29 @@ namespace {
 
 constexpr double kPValues[] = {0.0, 0.025, 0.05, 0.075, 0.10, 0.125, 0.15, 0.20, 0.25};
 
+// 16 bits over the levers' range: 65536 counts over the firmware's position limits, -1 to 1 rad.
+constexpr double kSixteenBitsOverRange = 65536.0 / 2.0 * 2.0 * std::numbers::pi;
+
 struct Variant {
   const char* name;
   codec::Mode mode;
   bool filter;
   bool floor;
+  fw::MotionVelocity velocity = fw::MotionVelocity::difference;  // what the HSI sends
+  double counts_per_rev = 16384.0;                               // both levers' encoders
 };
-// The paper's three modes with its rule (floor 0), then the same with the absolute floor.
+// The paper's three modes with its rule (floor 0), the same with the absolute floor, then the paper's rule with the
+// two other velocities of docs/hil-model.md: the adaptive-window difference, and the one-tick difference of an
+// encoder of 16 bits over the range (read by a hardware counter).
 constexpr Variant kVariants[] = {
     {"deadband", codec::Mode::deadband, false, false},
     {"predictive", codec::Mode::predictive, false, false},
     {"predictive+filter", codec::Mode::predictive, true, false},
     {"deadband+floor", codec::Mode::deadband, false, true},
     {"predictive+filter+floor", codec::Mode::predictive, true, true},
+    {"deadband+adaptive-window", codec::Mode::deadband, false, false, fw::MotionVelocity::adaptive_window},
+    {"deadband+16-bit-encoder", codec::Mode::deadband, false, false, fw::MotionVelocity::difference,
+     kSixteenBitsOverRange},
 };
 
 struct Job {
@@ -41,13 +52,29 @@ struct Job {
 };
 
 // Each run's metrics: sweep.csv's in the run's units, summary.csv's scaled (percent, mrad).
+// The packet rates: every data frame, then by cause (the deadband's are what the paper counts).
 const SweepMetric<SimResult> kMetrics[] = {
     {{"velocity_packet_rate", "{:.6f}", "velocity_rate_percent", 100, 2},
      [](const SimResult& r) { return r.velocity_packet_rate; }},
     {{"force_packet_rate", "{:.6f}", "force_rate_percent", 100, 2},
      [](const SimResult& r) { return r.force_packet_rate; }},
+    {{"velocity_deadband_rate", "{:.6f}", "velocity_deadband_percent", 100, 2},
+     [](const SimResult& r) { return r.velocity_deadband_rate; }},
+    {{"velocity_refresh_rate", "{:.6f}", "velocity_refresh_percent", 100, 2},
+     [](const SimResult& r) { return r.velocity_refresh_rate; }},
+    {{"velocity_rest_repeat_rate", "{:.6f}", "velocity_rest_repeat_percent", 100, 2},
+     [](const SimResult& r) { return r.velocity_rest_repeat_rate; }},
+    {{"force_deadband_rate", "{:.6f}", "force_deadband_percent", 100, 2},
+     [](const SimResult& r) { return r.force_deadband_rate; }},
+    {{"force_refresh_rate", "{:.6f}", "force_refresh_percent", 100, 2},
+     [](const SimResult& r) { return r.force_refresh_rate; }},
+    {{"force_rest_repeat_rate", "{:.6f}", "force_rest_repeat_percent", 100, 2},
+     [](const SimResult& r) { return r.force_rest_repeat_rate; }},
     {{"force_jnd_violation", "{:.6f}", "jnd_violation_percent", 100, 2},
      [](const SimResult& r) { return r.force_jnd_violation; }},
+    {{"hand_jnd_violation", "{:.6f}", "hand_jnd_violation_percent", 100, 2},
+     [](const SimResult& r) { return r.hand_jnd_violation; }},
+    {{"hand_force_rmse", "{:.6g}", "hand_force_rmse_n", 1, 4}, [](const SimResult& r) { return r.hand_force_rmse_n; }},
     {{"position_rmse", "{:.6g}", "position_rmse_mrad", 1000, 3},
      [](const SimResult& r) { return r.position_rmse_rad; }},
     {{"force_rmse", "{:.6g}", "force_rmse_n", 1, 4}, [](const SimResult& r) { return r.force_rmse_n; }},
@@ -61,24 +88,26 @@ PlotPanel panel(const std::string& metric, const std::string& ylabel = "", const
   return {"", ylabel, yrange, "", {{metric, ""}}, paper};
 }
 
-PlotSpec plots(const std::string& scenario, int seeds) {
-  const std::string spread = fmt::format("\\nmean of {} seed{}; bars: min to max", seeds, seeds == 1 ? "" : "s");
+PlotSpec plots(const std::string& scenario, const std::string& setup, int seeds) {
+  const std::string spread =
+      fmt::format("\\n{}; mean of {} seed{}; bars: min to max", setup, seeds, seeds == 1 ? "" : "s");
   const std::string paper = "\"-\" using 1:2 with points pt 7 ps 1.5 lc rgb \"black\" title \"paper, Fig. 8\"\n";
   PlotSpec p{"lever-hil sweep", "p_percent", "deadband parameter p [%]", "[0:25]", "variant", {}, "", {}};
   for (const auto& v : kVariants) p.series.emplace_back(v.name);
   p.figures = {
       {"packet_rate_velocity.png",
        "900,650",
-       scenario + ": velocity packets HSI -> TOP (cf. the paper's Fig. 8)" + spread,
-       {panel("velocity_rate_percent", "packet rate [% of 1 kHz]", "[0:100]", paper + "10,25\ne\n")}},
+       scenario + ": velocity packets HSI -> TOP, the deadband's (cf. the paper's Fig. 8)" + spread,
+       {panel("velocity_deadband_percent", "packet rate [% of 1 kHz]", "[0:100]", paper + "10,25\ne\n")}},
       {"packet_rate_force.png",
        "900,650",
-       scenario + ": force packets TOP -> HSI (cf. the paper's Fig. 8)" + spread,
-       {panel("force_rate_percent", "", "", paper + "2.5,10\n10,15\ne\n")}},
+       scenario + ": force packets TOP -> HSI, the deadband's (cf. the paper's Fig. 8)" + spread,
+       {panel("force_deadband_percent", "", "", paper + "2.5,10\n10,15\ne\n")}},
       {"distortion.png",
-       "900,650",
-       scenario + ": displayed force off by more than a JND" + spread,
-       {panel("jnd_violation_percent", "share of time [%]", "[0:*]")}},
+       "1200,600",
+       scenario + ": force off the measured one by more than a JND" + spread,
+       {{"displayed (the HSI's reconstruction)", "share of time [%]", "[0:*]", "", {{"jnd_violation_percent", ""}}, ""},
+        {"on the hand (its force on the handle)", "", "", "", {{"hand_jnd_violation_percent", ""}}, ""}}},
       {"position_error.png",
        "900,650",
        scenario + ": TOP position error (RMS against the HSI)" + spread,
@@ -112,6 +141,11 @@ int run_sweep(const SweepOptions& o) {
                             filter ? o.filter_hz_velocity : 0.0};
         c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
                          filter ? o.filter_hz_force : 0.0};
+        c.topology = o.topology;
+        set_hsi_force_loop(c, o.hsi_force_loop);
+        c.hsi_firmware.motion_velocity = job.variant->velocity;
+        c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev = job.variant->counts_per_rev;
+        if (job.variant->counts_per_rev > 16384.0) c.encoder_interface = EncoderInterface::counter;
         job.result = run_simulation(c);
       },
       [&](std::size_t i) {
@@ -124,7 +158,9 @@ int run_sweep(const SweepOptions& o) {
     if (job.seed == static_cast<std::uint64_t>(o.seeds))
       table.end_point(fmt::format("{},{}", job.variant->name, 100 * job.p));
   }
-  write_sweep(dir, table, gnuplot_script(plots(scenario_name(o.scenario), o.seeds)));
+  const std::string setup =
+      fmt::format("{}, HSI force loop {}", topology_name(o.topology), o.hsi_force_loop ? "on" : "off");
+  write_sweep(dir, table, gnuplot_script(plots(scenario_name(o.scenario), setup, o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

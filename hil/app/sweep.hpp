@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "lever/hil/human_operator.hpp"
+#include "lever/hil/simulation.hpp"
 
 namespace lever::hil {
 
@@ -25,6 +26,10 @@ struct SweepOptions {
   // beyond the loop's 500 Hz Nyquist, so any cut-off the 1 kHz loop can have removes what can be felt: off.
   double filter_hz_velocity = 30.0;
   double filter_hz_force = 0.0;
+  // The lever p sweeps (the paper's Fig. 8): the paper's setup, both levers in one PC, its HSI closing a force loop
+  // (docs/hil-model.md, "The paper's chain, choice by choice").
+  Topology topology = Topology::one_controller;
+  bool hsi_force_loop = true;
   // --over delay: the one-way delays, and p for both directions (deadband, no floor or filter).
   std::vector<double> delays_ms{0.0, 10.0, 25.0, 50.0, 100.0};
   double p = 0.1;

@@ -16,9 +16,9 @@ namespace lever::hil {
 template <typename LeverT>
 struct LeverSite {
   LeverSite(const fw::LeverConfig& fw_config, double angle, const StrainGaugeParams& gauge, std::uint64_t seed,
-            CanBus& bus, const Nanos& now)
+            CanBus& bus, const Nanos& now, Nanos tx_delay)
       : hal(fw_config.counts_per_rev, angle, gauge, seed), config(fw_config) {
-    hal.can_ = {&bus, bus.add_node(), &now};
+    hal.can_ = {&bus, bus.add_node(), &now, tx_delay};
     boot(1);
   }
   SimHal hal;
@@ -46,6 +46,13 @@ struct LeverSite {
   }
   void step(fw::Tick tick) {
     if (!down && !skip) lever->step(tick - boot_tick);
+  }
+  // The tick's halves when both levers run in one controller (fw::Lever::sample, act).
+  void sample(fw::Tick tick) {
+    if (!down && !skip) lever->sample(tick - boot_tick);
+  }
+  void act(fw::Tick tick) {
+    if (!down && !skip) lever->act(tick - boot_tick);
   }
   fw::LeverState state() const { return lever->supervisor().state(); }
   double torque() const { return hal.motor_.last.enable ? hal.motor_.last.torque_nm : 0.0; }

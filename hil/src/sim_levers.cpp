@@ -42,10 +42,13 @@ PowerUpAngles power_up_angles(const SimConfig& config) {
 SimLevers::SimLevers(const SimConfig& config, const PowerUpAngles& angles, Transport& transport, const Nanos& now) {
   if (!config.gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
   const fw::LeverConfig hsi_fw = hsi_firmware(config);
+  const Nanos tx_delay = config.topology == Topology::one_controller ? 0 : kFirmwareTxDelay;
   hsi_ = std::make_unique<LeverSite<SimHsi>>(hsi_fw, angles.hsi, config.gauge, config.seed * 4 + 3, transport.hsi_bus(),
-                                             now);
+                                             now, tx_delay);
   top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, config.gauge, config.seed * 4 + 4,
-                                             transport.top_bus(), now);
+                                             transport.top_bus(), now, tx_delay);
+  if (config.encoder_interface == EncoderInterface::counter)
+    for (SimHal* hal : {&hsi_->hal, &top_->hal}) hal->encoder_.set_queue_capacity(QuadratureEncoder::kMaxQueue);
   // The HSI's own gauge only matters to a closed-loop force display; its noise costs time otherwise.
   hsi_gauge_used_ = hsi_fw.use_force_sensor && hsi_fw.display.closed_loop;
 }

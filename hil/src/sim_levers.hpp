@@ -31,6 +31,15 @@ class SimLevers {
     hsi_->step(tick);
     top_->step(tick);
   }
+  // In one controller: both levers sample (and send), then the transport hands over the frames, then both act.
+  void sample(fw::Tick tick) {
+    hsi_->sample(tick);
+    top_->sample(tick);
+  }
+  void act(fw::Tick tick) {
+    hsi_->act(tick);
+    top_->act(tick);
+  }
 
   bool both_armed() const { return hsi_->lever->supervisor().armed() && top_->lever->supervisor().armed(); }
   SimView view(double t, fw::Tick tick) const {

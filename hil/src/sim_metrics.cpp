@@ -1,6 +1,7 @@
 #include "sim_metrics.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numbers>
 
 namespace lever::hil {
@@ -10,7 +11,9 @@ SimMetrics::SimMetrics(const SimConfig& config)
       nominal_delay_ticks_(nominal_one_way_delay_ticks(config)),
       prefilter_delay_ms_(
           config.force_codec.filter_hz > 0.0 ? 1e3 / (2.0 * std::numbers::pi * config.force_codec.filter_hz) : 0.0),
-      measured_history_(static_cast<std::size_t>(nominal_delay_ticks_) + 1) {}
+      measured_history_(static_cast<std::size_t>(nominal_delay_ticks_) + 1),
+      jnd_(config.jnd),
+      jnd_absolute_n_(config.jnd_absolute_n) {}
 
 void SimMetrics::step(fw::Tick tick, const TickForces& forces, const World& world, const SimLevers& levers) {
   const bool both_armed = levers.both_armed();
@@ -42,6 +45,11 @@ void SimMetrics::add_armed(fw::Tick tick, const TickForces& forces, const World&
   const auto& ht = levers.hsi().lever->telemetry();
   const auto& tt = levers.top().lever->telemetry();
   refresh_frames_ += ht.sent_refresh + tt.sent_refresh;
+  const double hand_error = forces.hand - forces.measured;
+  hand_sq_ += hand_error * hand_error;
+  hand_violations_ += std::fabs(hand_error) > std::max(jnd_ * std::fabs(forces.measured), jnd_absolute_n_);
+  if (ht.sent_data) ++by_cause_[0][static_cast<std::size_t>(ht.sent_cause)];
+  if (tt.sent_data) ++by_cause_[1][static_cast<std::size_t>(tt.sent_cause)];
   min_observed_energy_j_[0] = std::min(min_observed_energy_j_[0], ht.observed_energy_j);
   min_observed_energy_j_[1] = std::min(min_observed_energy_j_[1], tt.observed_energy_j);
   metrics_.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), forces.displayed,
@@ -65,6 +73,18 @@ void SimMetrics::finish(SimResult& result, const SimLevers& levers) const {
   result.hsi_lever_faults = lever_faults_[0];
   result.top_lever_faults = lever_faults_[1];
   result.refresh_frames = refresh_frames_;
+  const double ticks = result.armed_ticks > 0 ? static_cast<double>(result.armed_ticks) : 1.0;
+  auto rate = [&](int direction, fw::SendCause cause) {
+    return static_cast<double>(by_cause_[direction][static_cast<std::size_t>(cause)]) / ticks;
+  };
+  result.hand_force_rmse_n = std::sqrt(hand_sq_ / ticks);
+  result.hand_jnd_violation = static_cast<double>(hand_violations_) / ticks;
+  result.velocity_deadband_rate = rate(0, fw::SendCause::deadband);
+  result.velocity_refresh_rate = rate(0, fw::SendCause::refresh);
+  result.velocity_rest_repeat_rate = rate(0, fw::SendCause::rest_repeat);
+  result.force_deadband_rate = rate(1, fw::SendCause::deadband);
+  result.force_refresh_rate = rate(1, fw::SendCause::refresh);
+  result.force_rest_repeat_rate = rate(1, fw::SendCause::rest_repeat);
   result.hsi_min_observed_energy_j = min_observed_energy_j_[0];
   result.top_min_observed_energy_j = min_observed_energy_j_[1];
   result.hsi_dissipated_energy_j = dissipated_[0].total_j;

@@ -50,6 +50,10 @@ class SimMetrics {
   bool was_armed_[2] = {true, true};  // the scenario starts with both armed
   SimResult::LeverFaults lever_faults_[2];
   std::uint64_t refresh_frames_ = 0;
+  std::uint64_t by_cause_[2][3] = {};  // [HSI velocity, TOP force][fw::SendCause]
+  double jnd_, jnd_absolute_n_;
+  double hand_sq_ = 0.0;
+  std::uint64_t hand_violations_ = 0;
   double min_observed_energy_j_[2] = {0.0, 0.0};
 };
 

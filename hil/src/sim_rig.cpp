@@ -48,7 +48,13 @@ void SimRig::step(fw::Tick tick, double t) {
   transport_.step(now_);
   host_.step(tick, start_, faults_hold, levers_);
   world_.update_operator(tick, forces_.hand);
-  levers_.step(tick);
+  if (config_.topology == Topology::one_controller) {
+    levers_.sample(tick);
+    transport_.hand_over(now_);
+    levers_.act(tick);
+  } else {
+    levers_.step(tick);
+  }
 }
 
 fw::Tick SimRig::power_up() {

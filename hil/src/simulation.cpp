@@ -18,7 +18,13 @@ fw::LeverConfig SimConfig::default_firmware(protocol::Role role) {
   return c;
 }
 
+void set_hsi_force_loop(SimConfig& config, bool on) {
+  config.hsi_firmware.display.closed_loop = on;
+  config.hsi_firmware.use_force_sensor = on;
+}
+
 int nominal_one_way_delay_ticks(const SimConfig& config) {
+  if (config.topology == Topology::one_controller) return 0;  // handed over within the tick
   const double frame_ns = protocol::frame_bits_worst_case(8) * 1e9 / config.bitrate;
   const double ns = config.topology == Topology::one_site
                         ? frame_ns

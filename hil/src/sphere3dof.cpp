@@ -31,6 +31,7 @@ void validate(const SphereConfig& c) {
     bad("invalid hand parameters");
   if (!(c.sphere.radius_m > 0.0) || !(c.sphere.stiffness > 0.0)) bad("invalid sphere");
   if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be in 1..1000");
+  if (!(c.driver_cutoff_hz > 0.0 && c.driver_cutoff_hz < 500.0)) bad("the driver's cut-off must be in (0, 500) Hz");
   if (!(c.network.delay_ms >= 0.0) || !(c.network.jitter_ms >= 0.0) ||
       !(c.network.loss >= 0.0 && c.network.loss <= 1.0))
     bad("invalid network parameters");

@@ -12,20 +12,22 @@ constexpr double kTick = 1e-3;
 SphereOp::SphereOp(const SphereConfig& c, const Vec3& start, const SphereDelays& delays)
     : c_(c),
       down_ticks_(delays.down_ticks),
-      velocity_sender_(c.velocity_codec),
-      force_receiver_(c.force_codec.mode),
+      velocity_sender_(c.velocity_codec, sphere_velocity_wire()),
+      force_receiver_(c.force_codec.mode, sphere_force_wire(c.device)),
+      position_wire_(sphere_position_wire(c.device)),
       measured_(quantize(start, c.device.resolution_m)),
-      measured_prev_(measured_) {}
+      velocity_(c, measured_) {}
 
 void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
   measured_ = quantize(position, c_.device.resolution_m);
-  for (std::size_t i = 0; i < 3; ++i) velocity_[i] = (measured_[i] - measured_prev_[i]) / kTick;
-  measured_prev_ = measured_;
-  const auto vd = velocity_sender_.offer(t, velocity_);
+  const auto vd = velocity_sender_.offer(t, velocity_.update(measured_));
   velocity_sent_ = vd.send;
   if (vd.send) {
     ++packets_;
-    up.send({t, measured_, vd.wire}, t_ns);
+    UpPacket packet{t, {}, vd.wire};
+    bool clipped = false;
+    for (std::size_t i = 0; i < 3; ++i) packet.position[i] = position_wire_.encode(measured_[i], clipped);
+    up.send(packet, t_ns);
   }
 }
 

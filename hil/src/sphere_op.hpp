@@ -1,11 +1,12 @@
 #pragma once
 // The sphere-3dof's OP: the PC at the device. Every tick it reads the device (the position quantized to its
-// resolution, the velocity by backward difference, section III-E), sends the velocity through its deadband, and
-// displays the force the TOP sent, reconstructed on the TOP's clock the link's delay late.
+// resolution, the velocity as the driver gives it: device_velocity.hpp), sends the velocity through its deadband,
+// and displays the force the TOP sent, reconstructed on the TOP's clock the link's delay late.
 #include <cstdint>
 
 #include "lever/codec/receiver.hpp"
 #include "lever/codec/sender.hpp"
+#include "lever/hil/device_velocity.hpp"
 #include "sphere_packets.hpp"
 
 namespace lever::hil {
@@ -18,7 +19,7 @@ class SphereOp {
   void display(std::uint64_t k, Nanos t_ns, Downlink& down);
 
   const Vec3& measured() const { return measured_; }
-  const Vec3& velocity() const { return velocity_; }
+  const Vec3& velocity() const { return velocity_.velocity(); }
   bool velocity_sent() const { return velocity_sent_; }
   const Vec3& displayed() const { return displayed_; }
   std::uint64_t packets() const { return packets_; }
@@ -26,9 +27,11 @@ class SphereOp {
  private:
   const SphereConfig& c_;
   int down_ticks_;
-  codec::DeadbandSender<double, 3> velocity_sender_;
-  codec::DeadbandReceiver<double, 3> force_receiver_;
-  Vec3 measured_, measured_prev_, velocity_{}, displayed_{};
+  SphereSender velocity_sender_;
+  SphereReceiver force_receiver_;
+  SphereWire position_wire_;
+  Vec3 measured_, displayed_{};
+  DeviceVelocity velocity_;
   bool velocity_sent_ = false;
   std::uint64_t packets_ = 0;
 };

@@ -1,20 +1,23 @@
 #pragma once
-// What the sphere-3dof's two PCs send each other: the OP its measured position with the velocity codec's wire
-// value, the TOP the force codec's.
+// What the sphere-3dof's two PCs send each other, 16 bits per DoF: the OP its measured position with the velocity
+// codec's wire value, the TOP the force codec's.
+#include "lever/codec/receiver.hpp"
 #include "lever/codec/sender.hpp"
 #include "lever/hil/sphere3dof.hpp"
 #include "sphere_link.hpp"
 
 namespace lever::hil {
 
+using SphereSender = codec::DeadbandSender<double, 3, SphereWire>;
+using SphereReceiver = codec::DeadbandReceiver<double, 3, SphereWire>;
 struct UpPacket {
   double t = 0.0;
-  Vec3 position{};
-  codec::DeadbandSender<double, 3>::Wire velocity{};
+  SphereSender::Wire position{};  // sphere_position_wire()
+  SphereSender::Wire velocity{};
 };
 struct DownPacket {
   double t = 0.0;
-  codec::DeadbandSender<double, 3>::Wire force{};
+  SphereSender::Wire force{};
 };
 using Uplink = SphereChannel<UpPacket>;
 using Downlink = SphereChannel<DownPacket>;

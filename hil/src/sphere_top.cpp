@@ -8,13 +8,17 @@ constexpr double kTick = 1e-3;
 }
 
 SphereTop::SphereTop(const SphereConfig& c, const SphereDelays& delays)
-    : c_(c), up_ticks_(delays.up_ticks), velocity_receiver_(c.velocity_codec.mode), force_sender_(c.force_codec) {}
+    : c_(c),
+      up_ticks_(delays.up_ticks),
+      velocity_receiver_(c.velocity_codec.mode, sphere_velocity_wire()),
+      force_sender_(c.force_codec, sphere_force_wire(c.device)),
+      position_wire_(sphere_position_wire(c.device)) {}
 
 void SphereTop::receive(std::uint64_t k, Nanos t_ns, Uplink& up) {
   clock_ = static_cast<double>(static_cast<std::int64_t>(k) - up_ticks_) * kTick;
   up.receive(t_ns, clock_, [&](const UpPacket& p) {
     velocity_receiver_.receive(p.t, p.velocity);
-    anchor_ = p.position;
+    for (std::size_t i = 0; i < 3; ++i) anchor_[i] = position_wire_.decode(p.position[i]);
     anchor_t_ = p.t;
     has_position_ = true;
   });

@@ -27,8 +27,9 @@ class SphereTop {
 
   const SphereConfig& c_;
   int up_ticks_;
-  codec::DeadbandReceiver<double, 3> velocity_receiver_;
-  codec::DeadbandSender<double, 3> force_sender_;
+  SphereReceiver velocity_receiver_;
+  SphereSender force_sender_;
+  SphereWire position_wire_;
   bool has_position_ = false;
   Vec3 anchor_{};  // the last received position
   double anchor_t_ = 0.0;

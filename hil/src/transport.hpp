@@ -1,6 +1,6 @@
 #pragma once
 // The transport between the levers as lever-hil run models it: one CAN bus per site joined by two lever-bridges
-// over a simulated IP link, or one bus for both levers.
+// over a simulated IP link, one bus for both levers, or none: both levers in one controller, frames in memory.
 #include <optional>
 
 #include "lever/hil/can_bus.hpp"
@@ -31,10 +31,12 @@ class Transport {
   void add_bridges();
   // The frames of the tick that ends at `now`, each at its own time.
   void step(Nanos now);
+  // One controller: the frames the levers sampled at `now` reach each other before they act.
+  void hand_over(Nanos now) { hsi_bus_.advance_to(now); }
   void finish(SimResult& result) const;
 
   CanBus& hsi_bus() { return hsi_bus_; }
-  CanBus& top_bus() { return one_site_ ? hsi_bus_ : top_site_bus_; }
+  CanBus& top_bus() { return one_bus_ ? hsi_bus_ : top_site_bus_; }
   NetworkLink& to_top() { return to_top_; }
   NetworkLink& to_hsi() { return to_hsi_; }
 
@@ -42,7 +44,7 @@ class Transport {
   void service(Nanos from, Nanos now);
   bool quiet(Nanos now) const;
 
-  bool one_site_;
+  bool one_bus_;  // one controller's memory or one site's bus: both levers on hsi_bus_, no bridges
   Nanos latency_;
   // Serviced every step_: a frame a bridge picks up in (s - step, s] is queued at s with its own time + latency > s,
   // ahead of where the bus has run, so with step <= latency every frame's delay is exactly what the bus and network

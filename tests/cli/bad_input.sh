@@ -180,6 +180,16 @@ expect 2 "a fault after the end of the run" "fault 'bus-off@30' starts at 30 s, 
 expect 2 "a fault at the very end" "starts at 2 s, after the run's 2 s" "$hil" run --duration 2 --fault bus-off@2
 expect 2 "a delay step of 1e300 ms" "is over 60000" "$hil" run --fault delay-step@1:1e300
 expect 2 "a fault start of nan" "is not a non-negative number" "$hil" run --fault link-down@nan
+expect 2 "a network delay in one controller" "one controller has no network" \
+  "$hil" run --topology one-controller --delay-ms 5
+expect 2 "a link fault in one controller" "fault 'link-down@1' needs a bus or a link: one controller has neither" \
+  "$hil" run --topology one-controller --fault link-down@1
+expect 2 "a lever-only option for the sphere" "--encoder-counts, --encoder-interface and --hsi-force-loop belong to" \
+  "$hil" run --scenario sphere-3dof --hsi-force-loop on
+expect 2 "a sphere-only option for a lever" "--device-velocity and --driver-cutoff-hz belong to sphere-3dof" \
+  "$hil" run --driver-cutoff-hz 10
+expect 2 "sweep's lever options for the sphere" "--topology and --hsi-force-loop belong to the lever scenarios" \
+  "$hil" sweep --scenario sphere-3dof --out "$work/none" --topology one-site
 run "$hil" run --duration 2 --fault link-down@1+0.2 --json
 check "a good fault still runs: exit 0" test "$code" -eq 0
 

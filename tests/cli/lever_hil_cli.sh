@@ -49,11 +49,11 @@ check "trace has a header and one row per tick" test "$(wc -l <"$work/trace.csv"
 
 "$hil" sweep --scenario wall-tap --out "$work/sweep" --seeds 1 --duration 0.5 >"$work/sweep.out" 2>"$work/sweep.err"
 check "sweep exits 0" test $? -eq 0
-check "sweep printed progress" grep -q "sweep: 45/45 runs" "$work/sweep.err"
+check "sweep printed progress" grep -q "sweep: 63/63 runs" "$work/sweep.err"
 for f in sweep.csv summary.csv packet_rate_velocity.png packet_rate_force.png distortion.png position_error.png; do
   check "sweep wrote $f" test -s "$work/sweep/$f"
 done
-check "summary has 45 points" test "$(wc -l <"$work/sweep/summary.csv")" -eq 46
+check "summary has 63 points (7 variants x 9 p)" test "$(wc -l <"$work/sweep/summary.csv")" -eq 64
 
 # The delay sweep (issue 14): without passivity (observe) and with tdpa at each delay.
 "$hil" sweep --over delay --delays-ms 0,50 --seeds 2 --duration 2 --out "$work/dsweep" >"$work/ds.out" 2>"$work/ds.err"
@@ -89,10 +89,11 @@ expect_bad "sphere-3dof has no lever faults" "no levers" run --scenario sphere-3
 expect_bad "serve has no sphere-3dof" "no levers" serve --scenario sphere-3dof --hsi-config /dev/null --top-config /dev/null
 "$hil" sweep --scenario sphere-3dof --out "$work/sphere-sweep" --seeds 1 --duration 0.2 >/dev/null 2>"$work/sweep.err"
 check "sphere-3dof sweep exits 0" test $? -eq 0
-for f in sweep.csv summary.csv paper_fig12.csv fig12_packet_rates.png distortion.png position_error.png; do
+for f in sweep.csv summary.csv paper_fig12.csv fig12_packet_rates.png velocity_chains.png distortion.png position_error.png; do
   check "sphere-3dof sweep wrote $f" test -s "$work/sphere-sweep/$f"
 done
-check "sphere-3dof summary has 72 points" test "$(wc -l <"$work/sphere-sweep/summary.csv")" -eq 73
+check "sphere-3dof summary has 180 points (velocity: 4 chains, force: 1; 3 modes x 12 p)" \
+  test "$(wc -l <"$work/sphere-sweep/summary.csv")" -eq 181
 
 # serve, on a machine without the levers' devices: bad configurations are bad input, missing devices a
 # runtime failure naming the device; the end-to-end runs are in tests/kernel/lever_*.sh.

@@ -71,6 +71,22 @@ TEST_CASE("force_send transmits inside the deadband (refresh after silence)", "[
   CHECK(d.value[0] == 1.01);
 }
 
+// What the paper counts: the samples its rule sends. A forced send says whether the rule alone would have sent
+// it, so a refresh that falls on a noticeable change still counts as the rule's.
+TEST_CASE("every decision says whether the rule alone sends the sample, forced or not", "[codec][rule]") {
+  DeadbandSender<double, 1> sender(deadband(0.1));
+  const auto first = sender.offer(0.0, {1.0});
+  CHECK((first.send && first.exceeded));  // no reference yet: the rule sends
+  const auto inside = sender.offer(0.001, {1.05});
+  CHECK_FALSE((inside.send || inside.exceeded));
+  const auto forced_inside = sender.offer(0.002, {1.05}, true);
+  CHECK((forced_inside.send && !forced_inside.exceeded));
+  const auto forced_outside = sender.offer(0.003, {1.5}, true);
+  CHECK((forced_outside.send && forced_outside.exceeded));
+  const auto outside = sender.offer(0.004, {2.0});
+  CHECK((outside.send && outside.exceeded));
+}
+
 TEST_CASE("exceeds_deadzone is the Euclidean rule over all DoF", "[codec][rule]") {
   // |ref| = 5 and p = 0.125 make the threshold exactly 0.625.
   const Vec<double, 3> ref{3.0, 4.0, 0.0};

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/demo in its short mode: every figure of its two tables (Fig. 8 and Fig. 12 beside the paper) must be the
-# CSV's, found here by the column's name: the printed figure is the summary's mean, the summary's mean is the mean
-# of the runs in sweep.csv, and sweep.csv's run for seed 1 is what `lever-hil run` reports for the same point.
+# CSV's, found here by the column's name: the printed figure is the summary's mean (or the sum of two: the link's
+# refresh and rest-repeat frames), the summary's mean is the mean of the runs in sweep.csv, and sweep.csv's run
+# for seed 1 is what `lever-hil run` reports for the same point.
 # usage: demo_tables.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 root=$1 build=$2
@@ -56,41 +57,61 @@ check_figure() {
   check "$label: the summary's $scol $mean is the mean of sweep.csv's $rcol ($runs)" near "${mean:-0}" "${runs:-1e9}" 0.0051
 }
 
-# The Fig. 8 table: "  VARIANT p=P %[, ...]   VELOCITY %   FORCE %   OFF-JND %   [paper]".
+# check_link_frames LABEL PRINTED SUMMARY SWEEP DIRECTION SUMMARY_KEYS RUN_KEYS: the link's own frames, printed as
+# the sum of the summary's refresh and rest-repeat means, each the mean of its runs in sweep.csv.
+check_link_frames() {
+  local label=$1 printed=$2 summary=$3 sweep=$4 dir=$5 skeys=$6 rkeys=$7 a b ra rb
+  a=$(cell "$summary" "${dir}_refresh_percent" "$skeys")
+  b=$(cell "$summary" "${dir}_rest_repeat_percent" "$skeys")
+  check "$label: printed $printed is the summary's refresh $a + rest repeat $b" \
+    test "$printed" = "$(one_decimal "$(awk -v a="${a:-nan}" -v b="${b:-nan}" 'BEGIN { print a + b }')")"
+  ra=$(runs_mean "$sweep" "${dir}_refresh_rate" "$rkeys")
+  rb=$(runs_mean "$sweep" "${dir}_rest_repeat_rate" "$rkeys")
+  check "$label: the summary's refresh $a is the mean of sweep.csv's ($ra)" near "${a:-0}" "${ra:-1e9}" 0.0051
+  check "$label: the summary's rest repeat $b is the mean of sweep.csv's ($rb)" near "${b:-0}" "${rb:-1e9}" 0.0051
+}
+
+# The Fig. 8 table: "  VARIANT p=P %[, ...]   VELOCITY % + LINK %   FORCE % + LINK %   OFF-JND %   [paper]".
 sweep_dir=$work/demo/sweep
 rows=0
-while read -r variant p v f j; do
+while read -r variant p v vl f fl j; do
   rows=$((rows + 1))
   pr=$(awk -v p="$p" 'BEGIN { print p / 100 }')
-  for m in "velocity $v velocity_rate_percent velocity_packet_rate" "force $f force_rate_percent force_packet_rate" \
-    "off-JND $j jnd_violation_percent force_jnd_violation"; do
+  for m in "velocity $v velocity_deadband_percent velocity_deadband_rate" \
+    "force $f force_deadband_percent force_deadband_rate" "off-JND $j jnd_violation_percent force_jnd_violation"; do
     read -r what printed scol rcol <<<"$m"
     check_figure "Fig. 8, $variant p=$p %, $what" "$printed" "$sweep_dir/summary.csv" "$sweep_dir/sweep.csv" \
       "$scol" "$rcol" "variant=$variant;p_percent=$p" "variant=$variant;p=$pr"
   done
+  check_link_frames "Fig. 8, $variant p=$p %, velocity's link frames" "$vl" "$sweep_dir/summary.csv" \
+    "$sweep_dir/sweep.csv" velocity "variant=$variant;p_percent=$p" "variant=$variant;p=$pr"
+  check_link_frames "Fig. 8, $variant p=$p %, force's link frames" "$fl" "$sweep_dir/summary.csv" \
+    "$sweep_dir/sweep.csv" force "variant=$variant;p_percent=$p" "variant=$variant;p=$pr"
 done < <(sed -n "/beside the paper's Fig. 8/,/(off-JND:/p" "$work/out" |
-  sed -nE 's/^  ([a-z+]+) p=([0-9.]+) %[^0-9]* +([0-9.]+) % +([0-9.]+) % +([0-9.]+) %.*/\1 \2 \3 \4 \5/p')
-check "the Fig. 8 table has its 8 rows (found $rows)" test "$rows" -eq 8
+  sed -nE 's/^  ([a-z0-9+-]+) p=([0-9.]+) %[^0-9]* +([0-9.]+) % \+ *([0-9.]+) % +([0-9.]+) % \+ *([0-9.]+) % +([0-9.]+) %.*/\1 \2 \3 \4 \5 \6 \7/p')
+check "the Fig. 8 table has its 10 rows (found $rows)" test "$rows" -eq 10
 
-# The Fig. 12 table: "  DIRECTION, VARIANT[ (N Hz)], P %   HERE %   PAPER %".
+# The Fig. 12 table: "  DIRECTION, VARIANT[ (N Hz)], P % [CHAIN]   HERE %   PAPER %".
 sphere_dir=$work/demo/sphere
 rows=0
-while IFS='|' read -r direction variant p here; do
+while IFS='|' read -r direction variant p chain here; do
   rows=$((rows + 1))
   pr=$(awk -v p="$p" 'BEGIN { print p / 100 }')
-  check_figure "Fig. 12, $direction, $variant, p=$p %" "$here" "$sphere_dir/summary.csv" "$sphere_dir/sweep.csv" \
-    "${direction}_rate_percent" "${direction}_packet_rate" "direction=$direction;variant=$variant;p_percent=$p" \
-    "direction=$direction;variant=$variant;p=$pr"
+  check_figure "Fig. 12, $direction, $variant, p=$p %, $chain" "$here" "$sphere_dir/summary.csv" \
+    "$sphere_dir/sweep.csv" "${direction}_rate_percent" "${direction}_packet_rate" \
+    "direction=$direction;velocity_chain=$chain;variant=$variant;p_percent=$p" \
+    "direction=$direction;velocity_chain=$chain;variant=$variant;p=$pr"
 done < <(sed -n "/beside the paper's Fig. 12/,/(what is reproduced/p" "$work/out" |
-  sed -nE 's/^  (velocity|force), (3-DoF|3-DoF[^,(]*[^ ,(])( \([0-9]+ Hz\))?, ([0-9.]+) % +([0-9.]+) %.*/\1|\2|\4|\5/p')
-check "the Fig. 12 table has its 6 rows (found $rows)" test "$rows" -eq 6
+  sed -nE 's/^  (velocity|force), (3-DoF|3-DoF[^,(]*[^ ,(])( \([0-9]+ Hz\))?, ([0-9.]+) % \[([^]]+)\] +([0-9.]+) %.*/\1|\2|\4|\5|\6/p')
+check "the Fig. 12 table has its 9 rows (found $rows)" test "$rows" -eq 9
 
 # sweep.csv against lever-hil run at one point of each table, seed 1, the sweep's duration.
 duration=$(sed -nE 's/^sweep: [0-9]+ runs of ([0-9.]+) s .*/\1/p' "$work/out" | head -1)
 check "the demo's sweeps say their duration ($duration)" test -n "$duration"
-"$hil" run --scenario wall-tap --seed 1 --p 0.1 --duration "${duration:-1}" --json >"$work/run.json"
-for pair in "velocity_packet_rate velocity_packet_rate" "force_packet_rate force_packet_rate" \
-  "force_jnd_violation force_jnd_violation"; do
+"$hil" run --scenario wall-tap --seed 1 --p 0.1 --duration "${duration:-1}" --topology one-controller \
+  --hsi-force-loop on --json >"$work/run.json"
+for pair in "velocity_deadband_rate velocity_deadband_rate" "force_deadband_rate force_deadband_rate" \
+  "velocity_packet_rate velocity_packet_rate" "force_jnd_violation force_jnd_violation"; do
   read -r rcol key <<<"$pair"
   got=$(cell "$sweep_dir/sweep.csv" "$rcol" "variant=deadband;p=0.1;seed=1")
   want=$(jq -r ".$key" "$work/run.json" | awk '{ printf "%.6f", $1 }')
@@ -99,7 +120,7 @@ done
 "$hil" run --scenario sphere-3dof --seed 1 --p-velocity 0.2 --p-force 0 --delay-ms 0.2 --jitter-ms 0.1 \
   --duration "${duration:-1}" --json >"$work/sphere.json"
 for key in velocity_packet_rate force_packet_rate; do
-  got=$(cell "$sphere_dir/sweep.csv" "$key" "direction=velocity;variant=3-DoF;p=0.2;seed=1")
+  got=$(cell "$sphere_dir/sweep.csv" "$key" "direction=velocity;velocity_chain=driver 20 Hz;variant=3-DoF;p=0.2;seed=1")
   want=$(jq -r ".$key" "$work/sphere.json" | awk '{ printf "%.6f", $1 }')
   check "sphere sweep.csv's velocity 3-DoF p=0.2 seed 1 $key $got is lever-hil run's $want" test "$got" = "$want"
 done

@@ -70,8 +70,15 @@ class PairRig {
       const double code = std::round(contact_force() / g.newton_per_count + g.offset_counts);
       top_hal.force_.reading = fw::ForceReading{std::clamp(code, -32768.0, 32767.0), now, false};
     }
-    hsi.step(now);
-    top.step(now);
+    if (one_controller) {  // both levers in one controller: both sample, then both act
+      hsi.sample(now);
+      top.sample(now);
+      hsi.act(now);
+      top.act(now);
+    } else {
+      hsi.step(now);
+      top.step(now);
+    }
     ++now;
   }
   void run(fw::Tick ticks) {
@@ -100,6 +107,7 @@ class PairRig {
   LeverPlant hsi_plant;
   LeverPlant top_plant;
   bool gauge_alive = true;
+  bool one_controller = false;  // step the levers' halves (Lever::sample, act) instead of step()
   fw::Tick now = 1;
 
  private:

@@ -52,6 +52,38 @@ TEST_CASE("the TOP follows the HSI and the wall force comes back", "[firmware][c
   CHECK((rig.top.counters().data_sent - top_sent_before) / samples < 0.5);
 }
 
+// The paper's single PC (lever-hil's one-controller topology): both levers sample and send, then both act, so
+// each uses the other's sample of the same tick. With step() one after the other, the HSI would display the TOP's
+// force of the tick before.
+TEST_CASE("in one controller a sample reaches the other lever in its own tick, both ways", "[firmware][closed-loop]") {
+  auto every_change = [](protocol::Role role) {
+    fw::LeverConfig c = lever::test::rig_config(role);
+    c.motion_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+    c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+    c.motion_velocity = fw::MotionVelocity::difference;
+    return c;
+  };
+  PairRig rig(every_change(protocol::Role::hsi), every_change(protocol::Role::top));
+  rig.one_controller = true;
+  rig.boot_and_arm();
+  rig.hand_target = 0.4;  // into the wall at 0.3 rad: a force that changes every tick at first
+  int compared = 0, pressed = 0, same_force = 0, same_position = 0;
+  for (int i = 0; i < 1500; ++i) {
+    rig.tick();
+    const auto& h = rig.hsi.telemetry();
+    const auto& t = rig.top.telemetry();
+    if (!h.remote || !t.force_n) continue;
+    ++compared;
+    pressed += *t.force_n > 1.0;
+    same_force += std::fabs(*h.remote - *t.force_n) <= protocol::kForceLsb;
+    same_position += std::fabs(t.position_ref_rad - h.position_rad) <= protocol::kPositionLsbRad;
+  }
+  CHECK(pressed > 100);  // the rig's small contact bounces (docs/firmware.md), so there is force to carry
+  CHECK(compared > 1400);
+  CHECK(same_force == compared);
+  CHECK(same_position == compared);
+}
+
 // The paper's velocity (III-E): the quantized position's backward difference. Once the encoder stops counting
 // it is exactly zero, so the pure Weber rule (floor 0) sends nothing but refreshes; the smooth estimate still
 // decays toward zero after the last count, by more than p of itself, and keeps sending until it rounds to zero

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "lever/common/rng.hpp"
@@ -156,6 +157,26 @@ TEST_CASE("the frame that brings a stream to rest is repeated once, so its loss 
       CHECK(refreshes == std::vector<Tick>{1, 11, 205, 305, 460, 560, 660});
     }
   }
+}
+
+// The paper counts the packets its rule sends; the refresh and the rest repeat are this link's own, counted apart.
+TEST_CASE("each data frame says why it goes: the rule, a refresh, or a rest repeat", "[firmware][link]") {
+  const auto value_at = [](Tick now) { return now >= 100 && now < 195 ? 2.0 : 0.0; };
+  Link link({Mode::deadband, 0.1, 0.0, 0.0}, 100, 10);
+  std::vector<std::pair<Tick, SendCause>> sent;
+  for (Tick now = 1; now < 400; ++now) {
+    const auto out = link.tx.offer(now, value_at(now));
+    if (out.send) sent.emplace_back(now, out.cause);
+  }
+  using C = SendCause;
+  // The first frame (no reference yet: the rule's, though forced as a restart) and its repeat at rest, the rule's
+  // step up and down, the repeat of the frame that brought the stream to rest, then a refresh a period later.
+  CHECK(sent == std::vector<std::pair<Tick, SendCause>>{{1, C::deadband},
+                                                        {11, C::rest_repeat},
+                                                        {100, C::deadband},
+                                                        {195, C::deadband},
+                                                        {205, C::rest_repeat},
+                                                        {305, C::refresh}});
 }
 
 TEST_CASE("with a floor, rest is anywhere within the floor of zero", "[firmware][link]") {

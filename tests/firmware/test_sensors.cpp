@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "lever/fw/adaptive_window_velocity.hpp"
 #include "lever/fw/quadrature_decoder.hpp"
 #include "lever/fw/strain_gauge.hpp"
 #include "lever/fw/velocity_estimator.hpp"
@@ -171,6 +172,43 @@ TEST_CASE("the tracking loop is stable for every step it is given: late ticks ma
     INFO("dt " << dt);
     CHECK(worst < 0.5 * 1.3);  // critically damped: a small overshoot, no growth
     CHECK(last == Approx(0.5).margin(0.05));
+  }
+}
+
+// The adaptive-window difference (Janabi-Sharifi, Hayward and Chen 2000, end fit, d = 1 count, 20 ms): exactly
+// zero at rest, fine steps at a slow constant speed, and a short window as soon as the lever accelerates.
+TEST_CASE("the adaptive window is zero at rest, fine when slow, quick when the speed changes", "[firmware][velocity]") {
+  SECTION("at rest every window is flat: exactly zero, over the longest window") {
+    AdaptiveWindowVelocity w;
+    for (Tick t = 1; t <= 50; ++t) CHECK(w.update(1234, t) == 0.0);
+    CHECK(w.window() == 20u);
+  }
+  SECTION("a quarter count a tick: within 1/20 count of it, where the one-tick difference is 0 or 1") {
+    AdaptiveWindowVelocity w;
+    double worst = 0.0;
+    for (Tick t = 1; t <= 200; ++t) {
+      const double v = w.update(static_cast<std::int64_t>(std::floor(0.25 * static_cast<double>(t))), t);
+      if (t > 40) worst = std::max(worst, std::fabs(v - 0.25));
+    }
+    CHECK(worst <= 0.05 + 1e-12);
+    CHECK(w.window() >= 16u);
+  }
+  SECTION("from rest to 2 counts a tick: the window shrinks and follows within 3 ticks") {
+    AdaptiveWindowVelocity w;
+    std::int64_t count = 0;
+    for (Tick t = 1; t <= 30; ++t) w.update(count, t);
+    double v = 0.0;
+    for (Tick t = 31; t <= 33; ++t) v = w.update(count += 2, t);
+    CHECK(v == Approx(2.0).margin(0.35));
+    CHECK(w.window() <= 3u);
+  }
+  SECTION("the window never exceeds its maximum, and late ticks count as time") {
+    AdaptiveWindowVelocity w({5, 1});
+    for (Tick t = 1; t <= 30; ++t) w.update(7, t);
+    CHECK(w.window() == 5u);
+    AdaptiveWindowVelocity late;
+    late.update(0, 10);
+    CHECK(late.update(6, 13) == Approx(2.0));  // 6 counts over 3 ticks
   }
 }
 

@@ -1,7 +1,8 @@
 // sphere-3dof, the paper's 3-DoF experiment (IV-B): the environment's force is eq. (11), the device's
-// velocity is the backward difference of its quantized position, runs repeat per seed, the metric sees no
-// distortion where the codec makes none, and fewer packets for a wider deadband. Its documented table:
-// test_change_detection.cpp and test_paper_fidelity.cpp.
+// velocity is its driver's chain (test_device_velocity.cpp) or the backward difference of its quantized position,
+// runs repeat per seed, the metric sees no distortion where the codec makes none, and fewer packets for a wider
+// deadband. Its documented table: test_change_detection.cpp and test_paper_fidelity.cpp.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -59,9 +60,11 @@ TEST_CASE("the environment's force is Hooke's law on the penetration, along cent
   CHECK(outside > 500);
 }
 
-TEST_CASE("the device's velocity is the backward difference of its quantized position, exactly zero at rest",
+TEST_CASE("the difference chain is the backward difference of the quantized position, exactly zero at rest",
           "[hil][sphere]") {
-  SECTION("a hand that holds still: every sample is exactly zero, and only the first is sent") {
+  SphereConfig difference;
+  difference.velocity_chain = SphereVelocityChain::difference;
+  SECTION("a hand that holds still: every sample is exactly zero, and only the first is sent, with either chain") {
     SphereConfig c = traced(SphereConfig{}, 2.0);
     c.hand.explore = false;
     c.hand.tremor_rms_m = 0.0;
@@ -69,9 +72,13 @@ TEST_CASE("the device's velocity is the backward difference of its quantized pos
     for (const auto& row : r.trace) REQUIRE(same(row.velocity, Vec3{}));
     CHECK(r.zero_velocity_share == 1.0);
     CHECK(r.velocity_packets == 1u);
+    c.velocity_chain = SphereVelocityChain::difference;
+    const auto d = run_sphere(c);
+    CHECK(d.zero_velocity_share == 1.0);
+    CHECK(d.velocity_packets == 1u);
   }
   SECTION("a hand that holds still but trembles: the tip moves inside its cell, the velocity stays exactly zero") {
-    SphereConfig c = traced(SphereConfig{}, 2.0);
+    SphereConfig c = traced(difference, 2.0);
     c.hand.explore = false;
     const auto r = run_sphere(c);
     int moved_in_cell = 0;
@@ -84,7 +91,7 @@ TEST_CASE("the device's velocity is the backward difference of its quantized pos
     CHECK(moved_in_cell > 1000);  // a velocity from the true position would not be zero here
   }
   SECTION("exploring: each sample is (q_k - q_{k-1}) / 1 ms of the quantized positions, zero when they repeat") {
-    const auto r = run_sphere(traced(SphereConfig{}, 10.0));
+    const auto r = run_sphere(traced(difference, 10.0));
     const double resolution = OmniParams{}.resolution_m;
     int repeats = 0;
     for (std::size_t k = 1; k < r.trace.size(); ++k) {
@@ -131,19 +138,28 @@ TEST_CASE("sphere-3dof is deterministic per seed", "[hil][sphere]") {
   CHECK_FALSE(same(a.trace.back().position, d.trace.back().position));
 }
 
+// The wire carries 16 bits per DoF: "every change" is every change of a component's code.
 TEST_CASE("at p = 0 over a lossless link every change is sent and the metric sees no distortion", "[hil][sphere]") {
-  auto check = [](SphereConfig c) {
+  const SphereWire velocity_wire = sphere_velocity_wire(), force_wire = sphere_force_wire(OmniParams{});
+  auto codes_differ = [](const SphereWire& wire, const Vec3& a, const Vec3& b) {
+    bool clipped = false;
+    for (std::size_t i = 0; i < 3; ++i)
+      if (wire.encode(a[i], clipped) != wire.encode(b[i], clipped)) return true;
+    return false;
+  };
+  auto check = [&](SphereConfig c) {
     c = traced(c, 10.0);
+    c.velocity_chain = SphereVelocityChain::difference;  // whole cells a tick: the TOP's extrapolation is exact
     const auto r = run_sphere(c);
     CHECK(r.force_jnd_violation == 0.0);
     CHECK(r.downlink_jnd_violation == 0.0);
-    CHECK(r.force_rmse_n < 1e-9);      // the TOP's extrapolation rounds, nothing more
-    CHECK(r.position_rmse_m < 1e-12);  // the extrapolation's rounding, nothing more
-    // Sent exactly when the value differs from the sample before (the first is always sent).
+    CHECK(r.force_rmse_n < force_wire.resolution);  // the force's 16 bits, nothing more
+    CHECK(r.position_rmse_m < 1e-12);               // the extrapolation's rounding, nothing more
+    // Sent exactly when the code differs from the sample before's (the first is always sent).
     std::uint64_t velocity_changes = 1, force_changes = 1;
     for (std::size_t k = 1; k < r.trace.size(); ++k) {
-      const bool v = !same(r.trace[k].velocity, r.trace[k - 1].velocity);
-      const bool f = !same(r.trace[k].environment_force, r.trace[k - 1].environment_force);
+      const bool v = codes_differ(velocity_wire, r.trace[k].velocity, r.trace[k - 1].velocity);
+      const bool f = codes_differ(force_wire, r.trace[k].environment_force, r.trace[k - 1].environment_force);
       REQUIRE(r.trace[k].velocity_sent == v);
       REQUIRE(r.trace[k].force_sent == f);
       velocity_changes += v ? 1 : 0;
@@ -200,4 +216,33 @@ TEST_CASE("a wider deadband sends fewer packets", "[hil][sphere]") {
       before = now;
     }
   }
+}
+
+// 16 bits per DoF (the paper's section I): after a lift-off the prefiltered force decays toward zero by 17 % a tick
+// (1 - exp(-2 pi 30 Hz 1 ms)), more than p, so the sender sends every tick until the force is below half the
+// wire's step: from the device's 3.3 N peak that is ln(3.3 N / 0.05 mN) / 0.1885 = 59 ticks at most. In doubles
+// it never got there and kept sending through free space (9286 of 10292 force packets in seed 1).
+TEST_CASE("on a 16-bit wire the prefiltered force's tail after a lift-off ends", "[hil][sphere]") {
+  SphereConfig c = traced(sphere_variant(SphereDirection::force, codec::Mode::predictive, true, 0.025), 30.0);
+  const auto r = run_sphere(c);
+  auto free = [](const SphereTraceRow& row) { return same(row.environment_force, Vec3{}); };
+  std::uint64_t lift_offs = 0, free_packets = 0, longest_tail = 0, tail = 0;
+  for (std::size_t k = 1; k < r.trace.size(); ++k) {
+    const auto& row = r.trace[k];
+    if (!free(row)) {
+      tail = 0;
+      continue;
+    }
+    if (!free(r.trace[k - 1])) ++lift_offs;
+    ++tail;
+    if (row.force_sent) {
+      ++free_packets;
+      longest_tail = std::max(longest_tail, tail);
+    }
+  }
+  INFO(free_packets << " force packets in free space after " << lift_offs << " lift-offs");
+  CHECK(lift_offs >= 5);
+  CHECK(longest_tail <= 60u);
+  CHECK(free_packets <= 60 * lift_offs);
+  CHECK(r.force_packet_rate < 0.1);
 }

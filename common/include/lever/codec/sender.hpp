@@ -28,6 +28,9 @@ class DeadbandSender {
 
   struct Decision {
     bool send = false;
+    // The deadband rule alone sends this sample (always the first after a reset), forced or not: what the paper
+    // counts as a packet, while a forced send the rule would not have made is the link's own.
+    bool exceeded = false;
     bool saturated = false;  // the wire value was clipped at the quantizer's range
     Vec<T, N> value{};       // what the receiver holds at this sample (decoded value if sent, else its reference)
     Wire wire{};             // valid when send
@@ -68,9 +71,11 @@ class DeadbandSender {
       d.wire[i] = quantizer_.encode(value[i], d.saturated);
       decoded[i] = quantizer_.decode(d.wire[i]);
     }
-    if (!model_.empty() && !force_send) {
+    d.exceeded = true;
+    if (!model_.empty()) {
       const Vec<T, N> reference = model_.at(t);
-      if (!exceeds_deadzone(reference, decoded, config_.p, config_.floor)) {
+      d.exceeded = exceeds_deadzone(reference, decoded, config_.p, config_.floor);
+      if (!d.exceeded && !force_send) {
         d.value = reference;
         d.saturated = false;
         return d;

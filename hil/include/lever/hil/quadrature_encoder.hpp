@@ -38,8 +38,10 @@ class QuadratureEncoder {
   fw::AbState levels() const { return levels_of(count_); }
   std::int64_t count() const { return count_; }
   std::uint64_t overflowed() const { return overflowed_; }
-  // Fault injection: a smaller queue (at most its full size), as a v1 libgpiod line holds 16 events.
+  // The queue's depth, at most its full size: smaller for fault injection (a v1 libgpiod line holds 16 events),
+  // full for an encoder read by a hardware counter, which has no queue (EncoderInterface::counter).
   void set_queue_capacity(std::size_t capacity) { capacity_ = capacity < edges_.size() ? capacity : edges_.size(); }
+  static constexpr std::size_t kMaxQueue = 1024;
 
   // EdgeEncoderPort
   fw::EdgeDrain drain_edges(fw::EncoderEdge* out, std::size_t capacity) {
@@ -78,7 +80,7 @@ class QuadratureEncoder {
   std::int64_t counts_per_rev_;
   double counts_per_radian_;
   std::int64_t count_;
-  std::array<fw::EncoderEdge, 1024> edges_{};
+  std::array<fw::EncoderEdge, kMaxQueue> edges_{};
   std::size_t capacity_ = 32;  // libgpiod's v1 interface keeps 16 events per line: A and B
   std::uint64_t unreported_lost_ = 0;
   std::size_t head_ = 0, size_ = 0;

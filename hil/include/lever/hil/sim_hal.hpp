@@ -22,8 +22,9 @@ struct SimCan {
   CanBus* bus = nullptr;
   CanBus::Node node = 0;
   const Nanos* now = nullptr;
+  Nanos tx_delay = kFirmwareTxDelay;  // 0 when both levers run in one controller: a frame is a memory write
   bool receive(protocol::CanFrame& f) { return bus->receive(node, f); }
-  bool send(const protocol::CanFrame& f) { return bus->send(node, f, *now + kFirmwareTxDelay); }
+  bool send(const protocol::CanFrame& f) { return bus->send(node, f, *now + tx_delay); }
 };
 
 struct SimHal {

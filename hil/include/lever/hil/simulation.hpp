@@ -38,9 +38,15 @@ struct SimView {
 
 struct TraceRow;
 
-// Where the levers are: both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
+// How a lever's controller reads its encoder: as libgpiod edge events (the project's board: two 16-event queues,
+// drained every tick, 12 rad/s at 16384 counts per turn), or with a hardware counter (an MCU timer in encoder mode,
+// /dev/counterN), which has no queue; the HIL gives the latter an edge queue of QuadratureEncoder::kMaxQueue.
+enum class EncoderInterface { gpio_events, counter };
+
+// Where the levers are: both in one controller (the paper's single PC: no bus, each tick's samples reach the other
+// lever in that tick), both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
 // over an IP link (the network parameters apply only there).
-enum class Topology { one_site, two_sites };
+enum class Topology { one_controller, one_site, two_sites };
 
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
@@ -63,6 +69,7 @@ struct SimConfig {
   // Levers with incremental encoders power up at a random angle and home before the scenario; false: absolute
   // encoders at the operator's start angle (0.1 rad), armed at once.
   bool homing = true;
+  EncoderInterface encoder_interface = EncoderInterface::gpio_events;
   int substeps = 10;  // physics steps per 1 ms tick
   double bitrate = 1e6;
   double bridge_latency_us = 100.0;  // each bridge's receive-to-send time (at least 1 us)
@@ -98,9 +105,16 @@ struct TraceRow {
 struct SimResult {
   double velocity_packet_rate = 0.0;  // HSI data frames per tick while armed
   double force_packet_rate = 0.0;     // TOP data frames per tick while armed
-  double position_rmse_rad = 0.0;     // TOP angle against HSI angle
-  double force_rmse_n = 0.0;          // displayed (HSI) against measured (TOP gauge)
-  double force_jnd_violation = 0.0;   // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
+  // The same frames by cause (fw::SendCause), adding up to the rates above: those the deadband rule alone sends
+  // (the paper's count), the refreshes and the rest repeats the rule would not have sent.
+  double velocity_deadband_rate = 0.0, velocity_refresh_rate = 0.0, velocity_rest_repeat_rate = 0.0;
+  double force_deadband_rate = 0.0, force_refresh_rate = 0.0, force_rest_repeat_rate = 0.0;
+  double position_rmse_rad = 0.0;    // TOP angle against HSI angle
+  double force_rmse_n = 0.0;         // displayed (HSI) against measured (TOP gauge)
+  double force_jnd_violation = 0.0;  // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)
+  // What the hand feels: its force on the HSI's handle against the TOP's measurement, RMS and by the same JND rule
+  // (the displayed force above is the HSI's reconstruction, before its motor and the HSI's force loop).
+  double hand_force_rmse_n = 0.0, hand_jnd_violation = 0.0;
   // The same by cause (RunMetrics::add_force_causes): displayed against the measurement one nominal delay
   // earlier; the codec alone; the prefilter alone.
   double force_jnd_violation_link = 0.0, force_jnd_violation_codec = 0.0, force_jnd_violation_filter = 0.0;
@@ -133,6 +147,10 @@ struct SimResult {
   std::vector<FaultReport> faults;
   std::vector<TraceRow> trace;
 };
+
+// The HSI's force display closed on its own strain gauge (the paper's force control loop, IV-A-1: the received
+// force is the loop's set value), or open loop, the firmware's default.
+void set_hsi_force_loop(SimConfig& config, bool on);
 
 // The ticks from a TOP's measurement to the HSI's display of it when nothing waits: a data frame's worst-case
 // time on each bus, the bridges' latency and the network's configured delay (jitter not included), rounded up

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lever/codec/config.hpp"
+#include "lever/codec/quantizer.hpp"
 #include "lever/common/vec.hpp"
 #include "lever/hil/network.hpp"
 
@@ -49,11 +50,15 @@ struct SphereParams {
   double stiffness = 1000.0;  // N/m, u of eq. (11): about the Omni's stiffest axis-wise bound (Z, 1.02 N/mm)
 };
 
+// How the OP reads the device's velocity (docs/hil-model.md): as the PHANToM Omni ROS driver gives it (a second-order
+// backward difference and a third-order Butterworth low-pass), or the one-tick difference of the quantized position.
+enum class SphereVelocityChain : std::uint8_t { driver, difference };
+
 struct SphereTraceRow {
   double t = 0.0;
   Vec3 position{};  // the device's tip (true)
   Vec3 measured{};  // quantized to the device's resolution
-  Vec3 velocity{};  // backward difference of measured, the value offered to the codec
+  Vec3 velocity{};  // the velocity the OP reads (its chain on measured), the value offered to the codec
   bool velocity_sent = false;
   bool top_has_position = false;
   Vec3 top_position{};       // the TOP's extrapolated user position
@@ -71,6 +76,8 @@ struct SphereConfig {
   // A switched 100 Mbit/s Ethernet LAN; it never reorders (reorder is ignored: the LAN is FIFO).
   NetworkParams network{0.2, 0.1, 0.0, false};
   OmniParams device{};
+  SphereVelocityChain velocity_chain = SphereVelocityChain::driver;
+  double driver_cutoff_hz = 20.0;  // the driver's low-pass (the ROS driver's 20 Hz)
   HandParams hand{};
   SphereParams sphere{};
   double jnd = 0.1;              // Weber fraction of the distortion metric
@@ -114,6 +121,14 @@ struct SphereResult {
   double wall_time_s = 0.0;
   std::vector<SphereTraceRow> trace;
 };
+
+// 16 bits per DoF on the link (the paper's section I; docs/hil-model.md, "16 bits per DoF on the wire"): each
+// component a 16-bit integer, rounded to nearest, clipped at its range. The position at the device's own grid
+// (it goes over exactly), the velocity at 0.1 mm/s (+-3.28 m/s), the force at the device's peak over 32767.
+using SphereWire = codec::FixedPointQuantizer<double, std::int16_t>;
+inline SphereWire sphere_position_wire(const OmniParams& device) { return {device.resolution_m}; }
+inline SphereWire sphere_velocity_wire() { return {1e-4}; }
+inline SphereWire sphere_force_wire(const OmniParams& device) { return {device.max_force_n / 32767.0}; }
 
 // Eq. (11): zero outside the sphere (and at its centre), else u (r - |x - s|) along (x - s)/|x - s|.
 Vec3 sphere_force(const SphereParams& sphere, const Vec3& x);

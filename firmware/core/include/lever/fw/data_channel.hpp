@@ -6,6 +6,7 @@
 
 #include "lever/codec/codec.hpp"
 #include "lever/fw/link.hpp"
+#include "lever/fw/send_cause.hpp"
 #include "lever/fw/tick.hpp"
 #include "lever/protocol/messages.hpp"
 
@@ -21,10 +22,11 @@ constexpr WireQuantizer<std::int32_t> force_wire() noexcept {
 }
 constexpr WireQuantizer<std::int16_t> position_wire() noexcept { return {protocol::kPositionLsbRad}; }
 
-// A data frame a role hands to the lever to send, and whether it is a refresh (counted apart).
+// A data frame a role hands to the lever to send, whether it is flagged a refresh, and why it goes.
 struct OutgoingData {
   protocol::CanFrame frame;
   bool refresh = false;
+  SendCause cause = SendCause::deadband;
 };
 
 // The codec runs in tick units: integer-valued doubles make every time difference exact, so the predictor's
@@ -45,8 +47,9 @@ class DataSender {
   struct Output {
     bool send = false;
     bool saturated = false;
-    bool refresh = false;  // sent because of the refresh period (or a reconfiguration), not the deadband
+    bool refresh = false;  // forced: the refresh period, a restart, a reconfiguration or a rest repeat (the wire flag)
     bool restart = false;  // the first sample of a new stream
+    SendCause cause = SendCause::deadband;
     WireInt code = 0;
     std::uint8_t seq = 0;
     codec::Mode mode = codec::Mode::deadband;
@@ -86,8 +89,9 @@ class DataSender {
     const auto d = sender_.offer(static_cast<double>(now), {value}, refresh_due);
     Output out;
     if (!d.send) return out;
-    // Whether the deadband alone would have sent is not known once forced; a forced send is a refresh.
-    out = {true, d.saturated, refresh_due, restart_next_, d.wire[0], seq_++, config_.mode};
+    // A forced send is flagged a refresh on the wire; the codec still says whether the rule alone sends it.
+    const SendCause cause = d.exceeded ? SendCause::deadband : repeat_due ? SendCause::rest_repeat : SendCause::refresh;
+    out = {true, d.saturated, refresh_due, restart_next_, cause, d.wire[0], seq_++, config_.mode};
     last_sent_ = now;
     force_next_ = false;
     restart_next_ = false;

@@ -16,6 +16,8 @@ class EncoderPosition {
   // The encoder's count this tick (decoder or unwrapped counter).
   constexpr void update(std::int64_t counts) noexcept { counts_ = counts; }
 
+  constexpr std::int64_t counts() const noexcept { return counts_; }
+  constexpr double rad_per_count() const noexcept { return rad_per_count_; }
   // Angle since power-up, continuous whatever homing does: what velocity estimation differentiates.
   constexpr double raw_angle() const noexcept { return static_cast<double>(counts_) * rad_per_count_; }
   constexpr double raw_angle_at(std::int64_t counts) const noexcept {

@@ -78,8 +78,9 @@ class HsiRole {
   }
 
   std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
-    const double velocity =
-        motion_velocity_ == MotionVelocity::difference ? t.velocity_difference_rad_s : t.velocity_rad_s;
+    const double velocity = motion_velocity_ == MotionVelocity::difference        ? t.velocity_difference_rad_s
+                            : motion_velocity_ == MotionVelocity::adaptive_window ? t.velocity_window_rad_s
+                                                                                  : t.velocity_rad_s;
     const auto out = sender_.offer(now, velocity);
     if (!out.send) return std::nullopt;
     bool position_saturated = false;
@@ -89,7 +90,7 @@ class HsiRole {
     m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
     m.seq = out.seq;
     m.flags = {position_saturated, out.saturated, out.refresh, out.mode, out.restart};
-    return OutgoingData{protocol::pack(m, pair), out.refresh};
+    return OutgoingData{protocol::pack(m, pair), out.refresh, out.cause};
   }
 
   // set_deadband for the motion direction, which the HSI sends.

@@ -39,6 +39,7 @@ class Lever {
         counter_(config.counter_bits),
         position_(config.counts_per_rev, config.homing.method == HomingMethod::absolute),
         velocity_(config.velocity),
+        window_(config.adaptive_window),
         gauge_(config.gauge),
         homing_(config.homing),
         timing_(config.timing),
@@ -49,39 +50,25 @@ class Lever {
   }
 
   void step(Tick now) noexcept {
-    std::uint64_t started_ns = 0;
-    if constexpr (HasStepClock<H>) started_ns = hal_.monotonic_ns();
-    const Tick interval = timing_.begin(now);
-    // The estimator integrates the true interval (it is stable for any); controllers integrate at most the
-    // hard bound, past which the TIMING fault takes the lever down anyway.
-    const Tick bounded = interval < config_.timing.fault_after ? interval : config_.timing.fault_after;
-    const double dt = static_cast<double>(bounded) * kSecondsPerTick;
-    telemetry_.sent_data = false;
-    telemetry_.sent_refresh = false;
-
-    read_sensors(now, static_cast<double>(interval) * kSecondsPerTick);
+    begin(now);
     receive_frames(now);
-    supervisor_.boot_complete();
-    switch (supervisor_.state()) {
-      case LeverState::armed:
-      case LeverState::fault:
-        supervisor_.report(active_faults(now), now);
-        break;
-      case LeverState::homing:
-        supervisor_.report(homing_faults(), now);
-        break;
-      case LeverState::init:
-      case LeverState::disarmed:
-        break;
-    }
-    const double demand = control(now, dt);
-    apply_torque(demand);
+    decide(now);
     if (supervisor_.armed()) transmit_data(now);
-    if (now >= next_heartbeat_) {
-      transmit_heartbeat();
-      next_heartbeat_ = now + config_.heartbeat_period;
-    }
-    if constexpr (HasStepClock<H>) timing_.step_took(hal_.monotonic_ns() - started_ns);
+    end(now);
+  }
+
+  // step()'s two halves, for a controller that runs both levers of a pair (the paper's single PC): sample() both,
+  // hand each data frame to the other lever, then act() both, so a sample reaches the other lever in the tick it
+  // was taken, both ways. The data frame goes out in sample(), before this tick's frames and control: what it
+  // carries comes from the sensors alone.
+  void sample(Tick now) noexcept {
+    begin(now);
+    if (supervisor_.armed()) transmit_data(now);
+  }
+  void act(Tick now) noexcept {
+    receive_frames(now);
+    decide(now);
+    end(now);
   }
 
   const LeverConfig& config() const noexcept { return config_; }
@@ -114,6 +101,47 @@ class Lever {
  private:
   static constexpr std::size_t kMaxEdgesPerRead = 64;
   static constexpr std::size_t kMaxFramesPerTick = 16;  // bounds the loop; the rest waits for the next tick
+
+  // Timing and sensors.
+  void begin(Tick now) noexcept {
+    started_ns_ = 0;
+    if constexpr (HasStepClock<H>) started_ns_ = hal_.monotonic_ns();
+    const Tick interval = timing_.begin(now);
+    // The estimator integrates the true interval (it is stable for any); controllers integrate at most the
+    // hard bound, past which the TIMING fault takes the lever down anyway.
+    const Tick bounded = interval < config_.timing.fault_after ? interval : config_.timing.fault_after;
+    dt_ = static_cast<double>(bounded) * kSecondsPerTick;
+    telemetry_.sent_data = false;
+    telemetry_.sent_refresh = false;
+    read_sensors(now, static_cast<double>(interval) * kSecondsPerTick);
+  }
+
+  // Faults, control by state, the torque.
+  void decide(Tick now) noexcept {
+    supervisor_.boot_complete();
+    switch (supervisor_.state()) {
+      case LeverState::armed:
+      case LeverState::fault:
+        supervisor_.report(active_faults(now), now);
+        break;
+      case LeverState::homing:
+        supervisor_.report(homing_faults(), now);
+        break;
+      case LeverState::init:
+      case LeverState::disarmed:
+        break;
+    }
+    apply_torque(control(now, dt_));
+  }
+
+  // The heartbeat, and the step's time on the board.
+  void end(Tick now) noexcept {
+    if (now >= next_heartbeat_) {
+      transmit_heartbeat();
+      next_heartbeat_ = now + config_.heartbeat_period;
+    }
+    if constexpr (HasStepClock<H>) timing_.step_took(hal_.monotonic_ns() - started_ns_);
+  }
 
   static LeverConfig with_role(LeverConfig c) noexcept {
     c.role = Role::kRole;
@@ -157,6 +185,9 @@ class Lever {
     if (dt > 0.0) {
       telemetry_.velocity_rad_s = velocity_.update(raw_angle, dt);
       telemetry_.velocity_difference_rad_s = (raw_angle - previous_raw_angle_) / dt;
+      if (config_.motion_velocity == MotionVelocity::adaptive_window)
+        telemetry_.velocity_window_rad_s =
+            window_.update(position_.counts(), now) * (position_.rad_per_count() / kSecondsPerTick);
     }
     previous_raw_angle_ = raw_angle;
     if (uses_gauge_) telemetry_.force_n = gauge_.update(hal_.force().latest(), now);
@@ -360,6 +391,7 @@ class Lever {
     if (out->refresh) ++counters_.refresh_sent;
     telemetry_.sent_data = true;
     telemetry_.sent_refresh = out->refresh;
+    telemetry_.sent_cause = out->cause;
     if (const auto energy = role_.passivity().frame(now, out->refresh)) {
       send(protocol::pack(*energy, config_.pair, Role::kRole));
       ++counters_.energy_sent;
@@ -399,6 +431,7 @@ class Lever {
   CounterUnwrapper counter_;
   EncoderPosition position_;
   VelocityEstimator velocity_;
+  AdaptiveWindowVelocity window_;
   StrainGauge gauge_;
   Homing homing_;
   StepTiming timing_;
@@ -408,6 +441,8 @@ class Lever {
   LeverCounters counters_;
   std::optional<double> index_raw_angle_;
   double previous_raw_angle_ = 0.0;  // for the backward difference
+  double dt_ = 0.0;                  // this step's interval for the controllers, bounded
+  std::uint64_t started_ns_ = 0;     // when this step began, on the board's step clock
   Tick next_heartbeat_ = 0;
   Tick saturated_ticks_ = 0;
   double hold_position_ = 0.0;

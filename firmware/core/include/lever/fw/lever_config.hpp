@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "lever/codec/config.hpp"
+#include "lever/fw/adaptive_window_velocity.hpp"
 #include "lever/fw/controllers.hpp"
 #include "lever/fw/homing.hpp"
 #include "lever/fw/passivity.hpp"
@@ -22,7 +23,9 @@ namespace lever::fw {
 // estimate is smoother but never exactly zero. The HSI's own damping uses the estimate either way. A board
 // sends the estimate by default: the difference's one-count steps (0.38 rad/s at 16384 counts per turn) reach
 // the TOP's damping term and make a stiff contact bounce harder (the HIL's paper scenarios use the difference).
-enum class MotionVelocity : std::uint8_t { difference, estimate };
+// The adaptive window is a difference too, over the longest window (up to 20 ms) the counts allow: finer steps
+// while the lever moves slowly, still exactly zero at rest (adaptive_window_velocity.hpp).
+enum class MotionVelocity : std::uint8_t { difference, estimate, adaptive_window };
 
 struct LeverConfig {
   protocol::Role role = protocol::Role::hsi;
@@ -50,6 +53,7 @@ struct LeverConfig {
   std::uint8_t counter_bits = 32;   // width of a hardware counter (CountingEncoderPort); edge ports ignore it
   QuadratureDecoder::Config decoder{};
   VelocityEstimator::Config velocity{};
+  AdaptiveWindowVelocity::Config adaptive_window{};  // used when motion_velocity is adaptive_window
   StrainGauge::Config gauge{};
   bool use_force_sensor = true;  // TOP: the contact force; HSI: only for closed-loop force display
   Homing::Config homing{};       // method absolute: the encoder needs no homing
@@ -84,7 +88,7 @@ constexpr bool is_valid(const LeverConfig& c) noexcept {
          c.timing.long_step_us > 0 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
          h.torque_limit_nm > 0 && h.torque_limit_nm <= c.torque_limit_nm && h.stall_ticks > 0 &&
          std::isfinite(h.home_position_rad) && h.max_travel_rad > 0 && is_valid(c.passivity) &&
-         c.display.lever_arm_m > 0;
+         is_valid(c.adaptive_window) && c.display.lever_arm_m > 0;
 }
 
 }  // namespace lever::fw

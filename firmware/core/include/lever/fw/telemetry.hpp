@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <optional>
 
+#include "lever/fw/send_cause.hpp"
+
 namespace lever::fw {
 
 struct LeverCounters {
@@ -22,6 +24,7 @@ struct LeverTelemetry {
   bool position_valid = false;
   double velocity_rad_s = 0.0;             // the tracking estimate: smooth, for damping and control
   double velocity_difference_rad_s = 0.0;  // the quantized position's backward difference: exactly 0 at rest
+  double velocity_window_rad_s = 0.0;      // its adaptive-window difference (0 unless the HSI sends it)
   std::optional<double> force_n;           // own strain gauge, calibrated; empty when stale
   // Reconstructed peer value: HSI velocity at the TOP, force at the HSI (after the passivity controller's scale).
   std::optional<double> remote;
@@ -30,8 +33,9 @@ struct LeverTelemetry {
   double torque_demand_nm = 0.0;  // before the limit
   double torque_nm = 0.0;         // commanded
   bool motor_enabled = false;
-  bool sent_data = false;     // this tick (deadband or refresh)
-  bool sent_refresh = false;  // this tick, and it was a refresh
+  bool sent_data = false;                      // this tick (deadband or refresh)
+  bool sent_refresh = false;                   // this tick, and it was a refresh
+  SendCause sent_cause = SendCause::deadband;  // this tick's data frame's (data_channel.hpp)
   // Passivity (zero while off), since this lever armed: what the controller dissipated, and the observer's
   // energy (the peer's input as received less this port's output).
   double dissipated_energy_j = 0.0;

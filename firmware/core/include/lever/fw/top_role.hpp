@@ -146,7 +146,7 @@ class TopRole {
     m.tick = static_cast<std::uint16_t>(now & 0xFFFFu);
     m.seq = out.seq;
     m.flags = {out.saturated, false, out.refresh, out.mode, out.restart};
-    return OutgoingData{protocol::pack(m, pair), out.refresh};
+    return OutgoingData{protocol::pack(m, pair), out.refresh, out.cause};
   }
 
   // set_deadband for the force direction, which the TOP sends.
