@@ -1,14 +1,17 @@
 #include "lever/hil/device_velocity.hpp"
 
-#include <cmath>
 #include <numbers>
 
+#include "lever/math/elementary.hpp"
 #include "sphere_person.hpp"
 
 namespace lever::hil {
 
 Butterworth3 butterworth3(double cutoff_hz, double sample_hz) {
-  const double k = std::tan(std::numbers::pi * cutoff_hz / sample_hz);
+  // tan as lever::math's sin / cos: libm's tan may differ in its last bit between machines, and the coefficients
+  // feed the seeded run.
+  const double w = std::numbers::pi * cutoff_hz / sample_hz;
+  const double k = math::sin(w) / math::cos(w);
   const double k2 = k * k, k3 = k2 * k;
   const double d = k3 + 2.0 * k2 + 2.0 * k + 1.0;
   return {k3 / d, (3.0 * k3 + 2.0 * k2 - 2.0 * k - 3.0) / d, (3.0 * k3 - 2.0 * k2 - 2.0 * k + 3.0) / d,
