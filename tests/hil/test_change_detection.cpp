@@ -80,8 +80,11 @@ TEST_CASE("change detection: the wall-tap table stays within its spread over see
           row.at("encoder_interface") == "counter" ? EncoderInterface::counter : EncoderInterface::gpio_events;
       const auto m = mean_over_seeds(c, [](const SimConfig& x) {
         const auto r = run_simulation(x);
-        return Means{r.velocity_deadband_rate, r.force_deadband_rate, r.velocity_packet_rate, r.force_packet_rate,
-                     r.force_jnd_violation, 0.0};
+        return Means{.velocity = r.velocity_deadband_rate,
+                     .force = r.force_deadband_rate,
+                     .velocity_all = r.velocity_packet_rate,
+                     .force_all = r.force_packet_rate,
+                     .jnd = r.force_jnd_violation};
       });
       INFO(name << ": velocity " << m.velocity << " (all " << m.velocity_all << ") force " << m.force << " (all "
                 << m.force_all << ") jnd " << m.jnd);
@@ -111,7 +114,10 @@ TEST_CASE("change detection: the sphere-3dof table stays within its spread over 
       c.force_codec = codec_of(row.at("force_codec"));
       const auto m = mean_over_seeds(c, [](const SphereConfig& x) {
         const auto r = run_sphere(x);
-        return Means{r.velocity_packet_rate, r.force_packet_rate, 0.0, 0.0, r.force_jnd_violation, r.contact_share};
+        return Means{.velocity = r.velocity_packet_rate,
+                     .force = r.force_packet_rate,
+                     .jnd = r.force_jnd_violation,
+                     .contact = r.contact_share};
       });
       INFO(name << ": velocity " << m.velocity << " force " << m.force << " jnd " << m.jnd << " contact " << m.contact);
       CHECK(within(row.at("velocity"), m.velocity));
