@@ -13,7 +13,7 @@ refuses() {  # refuses NAME ARGUMENT_NAMED COMMAND...
   check "$name: names '$named' (got: $(head -c 200 "$work/err"))" grep -qF -- "$named" "$work/err"
 }
 for script in check-skips build build-mcu rate-table hil-change-bounds-wall-tap hil-change-bounds-sphere-3dof demo test setup package \
-  cross-build; do
+  cross-build cpu-budget; do
   refuses "scripts/$script --frobnicate" "--frobnicate" "$root/scripts/$script" --frobnicate
 done
 refuses "scripts/package with an unknown architecture" "'riscv64'" "$root/scripts/package" riscv64
@@ -23,6 +23,8 @@ refuses "scripts/cross-build with a third argument" "'extra'" "$root/scripts/cro
 refuses "scripts/build-mcu with a second argument" "'extra'" "$root/scripts/build-mcu" dir extra
 refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
 refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
+refuses "scripts/cpu-budget --shifts 5" "'5'" "$root/scripts/cpu-budget" --shifts 5
+refuses "scripts/cpu-budget --frobnicate" "--frobnicate" "$root/scripts/cpu-budget" --frobnicate
 refuses "scripts/demo with an argument" "'now'" "$root/scripts/demo" now
 refuses "scripts/test with an argument" "'now'" "$root/scripts/test" now
 refuses "fuzz/run-datagram-fuzzer --frobnicate" "--frobnicate" "$root/fuzz/run-datagram-fuzzer" --frobnicate
