@@ -18,6 +18,7 @@ struct PwmMotor::Impl {
   int stop_slot;
   PwmMotorStats stats;
   bool last_command_failed = false;
+  unsigned commands_since_confirm = 0;
   std::string description;
 
   Impl(SysfsPwm p, MotorLines l, const PwmMotorConfig& config, int slot, std::string d)
@@ -83,9 +84,19 @@ void PwmMotor::command(const fw::MotorCommand& command) noexcept {
   ++m.stats.commands;
   const bool enable = command.enable && !emergency_stop_latched();
   const DutySetpoint setpoint = enable ? m.map(command.torque_nm) : DutySetpoint{};
-  const bool ok = enable ? m.drive(setpoint) : m.release();
-  m.stats.duty_ns = setpoint.duty_ns;
-  m.stats.enabled = enable;
+  // Only changed values are written, so a lever at rest writes nothing and would not notice its PWM channel
+  // gone (unexported, its driver unbound) until the duty changed; every kConfirmEvery-th command writes it.
+  if (++m.commands_since_confirm >= kConfirmEvery) {
+    m.commands_since_confirm = 0;
+    m.pwm.confirm_duty_next();
+  }
+  bool ok = enable ? m.drive(setpoint) : m.release();
+  // A duty that could not be written is not driven: the driver goes off in this call, a period before the core
+  // would see driver_fault() and latch motor_driver, and never stays enabled behind a PWM in an unknown state.
+  const bool driven = enable && ok;
+  if (enable && !ok) m.release();
+  m.stats.duty_ns = driven ? setpoint.duty_ns : 0;
+  m.stats.enabled = driven;
   m.last_command_failed = !ok;
   if (!ok) ++m.stats.failed_commands;
 }

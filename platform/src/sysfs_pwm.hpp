@@ -22,6 +22,9 @@ class SysfsPwm {
   // value is then unknown, and the next call writes again). One pwrite, no allocation.
   bool set_duty_ns(std::uint32_t ns) noexcept;
   bool set_enabled(bool enabled) noexcept;
+  // The next set_duty_ns writes even the value last written: the kernel's PWM core takes an unchanged state
+  // without touching the hardware, and the write proves the channel is still there.
+  void confirm_duty_next() noexcept { duty_written_.reset(); }
   // Duty 0 then disabled, written whatever was written before.
   void stop() noexcept;
 

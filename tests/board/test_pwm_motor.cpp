@@ -217,6 +217,29 @@ TEST_CASE("PwmMotor: a value already written is not written again", "[motor]") {
   CHECK(tree.read("enable") == "untouched");
 }
 
+TEST_CASE("PwmMotor: an unchanged duty is written again every kConfirmEvery commands, proving the channel there",
+          "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotor motor = open_or_fail(config_for(tree));
+  // Up to the next confirming command the value stays as overwritten; that command writes it again.
+  motor.command({0.3, true});
+  tree.overwrite("duty_cycle", "untouched\n");
+  unsigned rewritten_after = 0;
+  for (unsigned i = 1; i <= PwmMotor::kConfirmEvery && rewritten_after == 0; ++i) {
+    motor.command({0.3, true});
+    if (tree.read("duty_cycle") == "15000") rewritten_after = i;
+  }
+  CHECK(rewritten_after >= 1);
+  CHECK(rewritten_after <= PwmMotor::kConfirmEvery);
+  // And from then on, exactly every kConfirmEvery commands.
+  tree.overwrite("duty_cycle", "untouched\n");
+  for (unsigned i = 1; i < PwmMotor::kConfirmEvery; ++i) motor.command({0.3, true});
+  CHECK(tree.read("duty_cycle") == "untouched");
+  motor.command({0.3, true});
+  CHECK(tree.read("duty_cycle") == "15000");
+  CHECK(tree.read("enable") == "1");
+}
+
 TEST_CASE("PwmMotor: a command allocates nothing", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   PwmMotor motor = open_or_fail(config_for(tree));

@@ -28,6 +28,10 @@ struct PwmMotorStats {
 
 class PwmMotor {
  public:
+  // Commands: the duty is written at least this often, changed or not, so that a PWM channel gone under a lever
+  // at rest fails a write within as many periods (and the motor is released in that command).
+  static constexpr unsigned kConfirmEvery = 10;
+
   // Validates the config, sets up the PWM channel (SysfsPwm: exported if needed, disabled, duty 0, period,
   // polarity), requests the lines (enable and direction deasserted), and registers for the emergency stop.
   // Fails naming the file or line and the reason; at most kMaxStoppableMotors (8) are open at a time.
