@@ -52,6 +52,9 @@ mark=$(log_mark "$out/two-sites-hsi.candump")
 command vcan0 3
 check "re-arm: the HSI is armed again" heard_armed "$out/two-sites-hsi.candump" "$mark" hsi
 check "re-arm: the TOP is armed again" heard_armed "$out/two-sites-hsi.candump" "$mark" top
+sleep 3
+check "and both stay armed (status lines after 3 s)" \
+  test "$(last_stat hsi .state)/$(last_stat top .state)" = armed/armed
 
 kill -TERM "$serve_pid"
 wait "$serve_pid"; code=$?
@@ -59,8 +62,12 @@ check "lever-hil serve exits 0 on SIGTERM (got $code)" test "$code" -eq 0
 report=$out/two-sites.report
 jq . "$report"
 r() { jq -r "$1" "$report"; }
+# The script keeps the pair armed 5 s before the cut and 3 s after the re-arm, and the rest of the time is the
+# harness's own pace: a fault of either lever in those spans cuts the 8 s short. (It asked for 10 s while its
+# checks took longer in guest time; a run here served 14.8 s with 9.8 armed and no fault but the cut.)
+check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds them armed)" \
+  test "$(r '.armed_s > 7.9')" = true
 # 25 mrad is what the TOP's saturated position loop allows (lever_one_site.sh); at rest the link adds nothing.
-check "both armed for $(r .armed_s) s in all" test "$(r '.armed_s > 10')" = true
 check "the TOP holds the HSI's position over the link: rms error $(r .position_rmse) rad < 0.025" \
   test "$(r '.position_rmse < 0.025')" = true
 "$dbc_decode" --summary "$dbc" "$out/two-sites-hsi.candump" >"$work/decoded"; code=$?
