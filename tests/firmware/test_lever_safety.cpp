@@ -410,6 +410,15 @@ struct HomingRig {
     m.opcode = op;
     bus.inject(protocol::pack(m, 0));
   }
+  // Powered up, homed against the stop and armed: where the fault tests begin.
+  void home_and_arm() {
+    for (int i = 0; i < 60; ++i) tick();
+    command(Opcode::home);
+    for (int i = 0; i < 6000 && !top.telemetry().position_valid; ++i) tick();
+    tick();
+    command(Opcode::arm);
+    tick();
+  }
 };
 
 }  // namespace
@@ -446,12 +455,7 @@ TEST_CASE("an incremental lever is unhomed at power-up, refuses to arm, homes ag
 TEST_CASE("lost edges latch ENCODER, invalidate the position, and only homing makes it valid again",
           "[firmware][lever][homing][encoder]") {
   HomingRig rig;
-  for (int i = 0; i < 60; ++i) rig.tick();
-  rig.command(Opcode::home);
-  for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
-  rig.tick();
-  rig.command(Opcode::arm);
-  rig.tick();
+  rig.home_and_arm();
   REQUIRE(rig.top.supervisor().armed());
   rig.hal.encoder_.lost = 5;  // the source says: five edges dropped
   rig.tick();
@@ -480,12 +484,7 @@ TEST_CASE("lost edges latch ENCODER, invalidate the position, and only homing ma
 TEST_CASE("a latched fault clears only by re-arm: a home meant for another lever leaves a faulted one in fault",
           "[firmware][lever][homing][supervisor]") {
   HomingRig rig;
-  for (int i = 0; i < 60; ++i) rig.tick();
-  rig.command(Opcode::home);
-  for (int i = 0; i < 6000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
-  rig.tick();
-  rig.command(Opcode::arm);
-  rig.tick();
+  rig.home_and_arm();
   REQUIRE(rig.top.supervisor().armed());
   rig.hal.motor_.fault = true;  // the driver reports a fault, then recovers
   rig.tick();

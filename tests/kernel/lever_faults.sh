@@ -18,11 +18,7 @@ trap stop_all EXIT
 
 pin_tool ip || exit 1
 one_site faults --duration 0 --json
-require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
-require "(TOP too)" wait_for 60 top '.state == "disarmed"'
-command vcan0 6
-require "both home" wait_for 120 hsi '.position_valid'
-require "(TOP too)" wait_for 120 top '.position_valid'
+up_and_homed
 command vcan0 1
 require "both arm" wait_for_serve faults "both levers armed"
 pin_tool lever-fw "$bin/lever-fw" || exit 1  # for --motor-off, started as fast as a service manager would
@@ -80,8 +76,7 @@ motor_off() {
 }
 top_enable_low() { local value; read -r value <"$top_gpio/sim_gpio2/value" && [[ $value == 0 ]]; }
 # poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
-# serve's world (an ordinary process): as an ordinary process itself it saw a state up to 12 ms after the
-# controller's stamp, queued behind the world's steps.
+# serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }
 # time_to NAME MIN_MS MAX_MS T0 CONDITION...: waits (polling each 0.2 ms of guest time, up to 5 s) until the
 # condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`

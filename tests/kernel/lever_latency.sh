@@ -24,11 +24,7 @@ if [[ $topology == one-site ]]; then
 else
   two_sites "$name" --latency-probe --duration 20 --json --trace "$out/$name.trace.csv"
 fi
-require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
-require "(TOP too)" wait_for 60 top '.state == "disarmed"'
-command vcan0 6
-require "both home" wait_for 120 hsi '.position_valid'
-require "(TOP too)" wait_for 120 top '.position_valid'
+up_and_homed
 command vcan0 1
 require "both arm" wait_for_serve "$name" "both levers armed"
 # Waited for without a poll: no program is started while the scenario runs (repeatability, in lever_sites_lib.sh).

@@ -10,11 +10,7 @@ set -uo pipefail
 trap stop_all EXIT
 
 one_site restart --duration 0 --hands-off --json --trace "$out/restart.trace.csv"
-require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
-require "(TOP too)" wait_for 60 top '.state == "disarmed"'
-command vcan0 6
-require "both home" wait_for 120 hsi '.position_valid'
-require "(TOP too)" wait_for 120 top '.position_valid'
+up_and_homed
 mark=$(log_mark "$out/restart.candump")
 command vcan0 1
 require "both arm: the HSI" heard_armed "$out/restart.candump" "$mark" hsi

@@ -192,6 +192,16 @@ wait_for() {
   return 1
 }
 
+# up_and_homed: both levers up disarmed, then homed on a cansend home command (the checks every pair test starts
+# with; arming is each test's own)
+up_and_homed() {
+  require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
+  require "(TOP too)" wait_for 60 top '.state == "disarmed"'
+  command vcan0 6
+  require "both home" wait_for 120 hsi '.position_valid'
+  require "(TOP too)" wait_for 120 top '.position_valid'
+}
+
 # command CAN OPCODE: a command frame to both levers of pair 0 (opcodes: 1 arm, 3 rearm, 6 home), by cansend
 command() { cansend "$1" "080#0$2""03000000000000"; }
 

@@ -63,8 +63,7 @@ report=$out/two-sites.report
 jq . "$report"
 r() { jq -r "$1" "$report"; }
 # The script keeps the pair armed 5 s before the cut and 3 s after the re-arm, and the rest of the time is the
-# harness's own pace: a fault of either lever in those spans cuts the 8 s short. (It asked for 10 s while its
-# checks took longer in guest time; a run here served 14.8 s with 9.8 armed and no fault but the cut.)
+# harness's own pace: a fault of either lever in those spans cuts the 8 s short.
 check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds them armed)" \
   test "$(r '.armed_s > 7.9')" = true
 # 25 mrad is what the TOP's saturated position loop allows (lever_one_site.sh); at rest the link adds nothing.

@@ -48,10 +48,10 @@ class RealtimeLoop {
   ~RealtimeLoop();
 
   // Calls step(fw::Tick) once per period until `stop` is requested (checked before each sleep), tick 1 at the
-  // first whole multiple of the period on CLOCK_MONOTONIC after the call. Per period the loop allocates nothing and calls clock_nanosleep and twice
-  // clock_gettime (the vDSO's where the clocksource allows); getrusage once when the steady part starts and once
-  // at the end. Statistics start afresh with each run. Returns false, running nothing, on a thread other than
-  // open()'s.
+  // first whole multiple of the period on CLOCK_MONOTONIC after the call. Per period the loop allocates nothing and
+  // calls clock_nanosleep and twice clock_gettime (the vDSO's where the clocksource allows); getrusage once when the
+  // steady part starts and once at the end. Statistics start afresh with each run. Returns false, running nothing, on a
+  // thread other than open()'s.
   template <typename Step>
   bool run(Step&& step, std::stop_token stop) {
     if (!begin_run()) return false;
