@@ -146,12 +146,64 @@ for case in fifo-enable fifo-export dir-duty loop-period; do
   check "--motor-off on $case: exit 1 (got $code: $(cat "$work/err"))" test "$code" -eq 1
   check "--motor-off on $case: done within 3 s (export_timeout_ms 1000 and a few writes; took $elapsed_ms ms)" \
     test "$elapsed_ms" -lt 3000
-  check "--motor-off on $case: names the file" grep -q "motor-off: cannot open the motor: motor PWM: .*$root" "$work/err"
+  check "--motor-off on $case: names the file" grep -q "motor-off: cannot stop the motor .*: motor PWM: .*$root" "$work/err"
 done
 printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.toml"
 timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1
-check "--motor-off without the PWM: names it" grep -q "motor-off: cannot open the motor.*no-such-sys" "$work/err"
+check "--motor-off without the PWM: names it" grep -q "motor-off: cannot stop the motor.*no-such-sys" "$work/err"
+
+# --motor-off reads the motor's keys alone: a configuration that no longer validates (edited under the running
+# lever, a key another version refuses) still stops the motor, and says what else is wrong. When even the motor's
+# keys cannot be read, the motor state the lever wrote at start (--motor-state) names the motor.
+running() { printf '1\n' >"$pwm/pwm0/enable"; printf '30000\n' >"$pwm/pwm0/duty_cycle"; }
+stopped() { [[ $(head -n1 "$pwm/pwm0/enable") == 0 && $(head -n1 "$pwm/pwm0/duty_cycle") == 0 ]]; }
+motor_off_case() {  # NAME EXPECTED_CODE SAYS CONFIG [--motor-state FILE]: --motor-off on a running motor
+  local name=$1 expected=$2 says=$3 config=$4; shift 4
+  running
+  timeout 20 "$fw" --config "$config" --motor-off "$@" 2>"$work/err"; code=$?
+  check "--motor-off, $name: exit $expected (got $code: $(tr '\n' '|' <"$work/err"))" test "$code" -eq "$expected"
+  if ((expected == 0)); then
+    check "--motor-off, $name: the motor is stopped (enable 0, duty 0)" stopped
+  else
+    check "--motor-off, $name: the motor was left as it was (enable 1)" test "$(head -n1 "$pwm/pwm0/enable")" = 1
+  fi
+  check "--motor-off, $name: says '$says'" grep -qF -- "$says" "$work/err"
+}
+{ cat "$work/motor.toml"; printf '[encoder]\ncounts_per_rev = 0.5\n'; } >"$work/bad-encoder.toml"
+motor_off_case "wrong encoder range" 0 "encoder.counts_per_rev: must be" "$work/bad-encoder.toml"
+{ cat "$work/motor.toml"; printf '[board.gauge]\nscale_factor = 2.0\n'; } >"$work/bad-gauge-key.toml"
+motor_off_case "unknown gauge key" 0 "board.gauge.scale_factor: unknown key" "$work/bad-gauge-key.toml"
+{ cat "$work/motor.toml"; printf '[gauge]\nstale_ms = 2\n'; } >"$work/bad-gauge-timing.toml"
+motor_off_case "gauge timing relation broken" 0 "gauge.stale_ms: 2 ms does not outlast one missed poll" \
+  "$work/bad-gauge-timing.toml"
+{ cat "$work/motor.toml"; printf '[safety]\nposition_min_rad = 1.0\nposition_max_rad = -1.0\n'; } >"$work/bad-range.toml"
+motor_off_case "safety range inverted" 0 "the minimum must be below the maximum" "$work/bad-range.toml"
+# The motor state: written by a lever-fw at start, before anything is opened (here it then fails at the encoder).
+{ cat "$work/motor.toml"; printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n'; } >"$work/run.toml"
+timeout 20 "$fw" --config "$work/run.toml" --motor-state "$work/run/motor" 2>"$work/err"; code=$?
+check "a lever-fw that cannot write its motor state does not start: exit 1 (got $code)" test "$code" -eq 1
+check "and says so" grep -qF "the motor state for --motor-off: cannot write $work/run/motor" "$work/err"
+mkdir -p "$work/run"
+timeout 20 "$fw" --config "$work/run.toml" --motor-state "$work/run/motor" 2>"$work/err"; code=$?
+check "a lever-fw that fails at its encoder has written its motor state first (exit $code)" test -s "$work/run/motor"
+cp "$work/run.toml" "$work/cut.toml" && truncate -s "$(($(stat -c %s "$work/run.toml") / 2))" "$work/cut.toml"
+motor_off_case "file cut in half, no motor state" 1 "the motor is NOT stopped" "$work/cut.toml"
+motor_off_case "file cut in half" 0 "(named by the motor state $work/run/motor)" "$work/cut.toml" \
+  --motor-state "$work/run/motor"
+motor_off_case "file gone" 0 "(named by the motor state $work/run/motor)" "$work/no-such.toml" \
+  --motor-state "$work/run/motor"
+{ cat "$work/motor.toml"; printf 'max_duty = 7\n'; } >"$work/bad-motor.toml"  # in [board.motor]
+motor_off_case "a motor key out of range" 0 "(named by the motor state $work/run/motor)" "$work/bad-motor.toml" \
+  --motor-state "$work/run/motor"
+motor_off_case "a motor key out of range, no motor state" 1 "board.motor.max_duty: must be" "$work/bad-motor.toml"
+# Edited under the running lever to name another channel: both the one it ran (the state) and the new one stop.
+mkdir -p "$pwm/pwm1" && for f in enable duty_cycle period polarity; do cp "$pwm/pwm0/$f" "$pwm/pwm1/$f"; done
+sed 's/^pwm_channel = 0/pwm_channel = 1/' "$work/run/motor" >"$work/other.toml"
+printf '1\n' >"$pwm/pwm1/enable"
+motor_off_case "the configuration names another channel than the state" 0 "(named by the motor state" \
+  "$work/other.toml" --motor-state "$work/run/motor"
+check "--motor-off, another channel: that one stopped too" test "$(head -n1 "$pwm/pwm1/enable")" = 0
 "$fw" --config "$work/motor.toml" --motor-off --check-config 2>/dev/null; code=$?
 check "--motor-off with --check-config: exit 2 (got $code)" test "$code" -eq 2
 "$fw" --config "$examples/top.toml" --sim 2>/dev/null; code=$?

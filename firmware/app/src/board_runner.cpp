@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "lever/app/gauge_port.hpp"
+#include "lever/app/motor_state.hpp"
 #include "lever/app/stats_line.hpp"
 #include "lever/fw/lever.hpp"
 #include "lever/platform/board_can_port.hpp"
@@ -147,7 +148,14 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
 
 }  // namespace
 
-int run_board(const FwConfig& config, bool json_lines, const std::atomic<bool>& stop) {
+int run_board(const FwConfig& config, bool json_lines, const std::string& motor_state, const std::atomic<bool>& stop) {
+  // Before anything is opened: however this run ends, --motor-off finds the motor named.
+  if (!motor_state.empty()) {
+    if (const auto error = write_motor_state(motor_state, config); !error.empty()) {
+      fmt::print(stderr, "lever-fw: the motor state for --motor-off: {}\n", error);
+      return kRuntimeFailure;
+    }
+  }
   auto encoder = opened(platform::GpioEncoder::open(encoder_config(config.board)), "encoder");
   if (!encoder) return kRuntimeFailure;
   std::optional<platform::ModbusGauge> gauge;

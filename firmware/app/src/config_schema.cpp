@@ -154,6 +154,34 @@ std::optional<std::string> ConfigSchema::load_file(const std::string& path) {
   return load_string(file.text, path);
 }
 
+std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_file_each(const std::string& path) {
+  const auto file = program::read_config_file(path);
+  if (!file.error.empty()) return {{"", file.error}};
+  return load_string_each(file.text, path);
+}
+
+std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_string_each(std::string_view text,
+                                                                     const std::string& source_name) {
+  toml::table t;
+  try {
+    t = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    return {{"", fmt::format("{}:{}: {}", source_name, e.source().begin.line, e.description())}};
+  }
+  std::vector<KeyProblem> problems;
+  std::vector<std::string> keys;
+  collect_keys(t, "", keys);
+  for (const auto& key : keys)
+    if (index_.find(key) == index_.end())
+      problems.push_back({key, fmt::format("{}: {}: unknown key", source_name, printable(key))});
+  for (const auto& f : fields_) {
+    const auto node = t.at_path(f.key);
+    if (!node) continue;
+    if (auto e = f.load(*node.node())) problems.push_back({f.key, fmt::format("{}: {}: {}", source_name, f.key, *e)});
+  }
+  return problems;
+}
+
 std::optional<std::string> ConfigSchema::load_value(const std::string& key, const toml::node& value,
                                                     const std::string& source) {
   const auto it = index_.find(key);
@@ -162,10 +190,11 @@ std::optional<std::string> ConfigSchema::load_value(const std::string& key, cons
   return std::nullopt;
 }
 
-std::string ConfigSchema::print() const {
+std::string ConfigSchema::print(std::string_view prefix) const {
   std::string out;
   std::string section;
   for (const auto& f : fields_) {
+    if (!f.key.starts_with(prefix)) continue;
     const auto dot = f.key.rfind('.');
     const std::string table = dot == std::string::npos ? "" : f.key.substr(0, dot);
     const std::string name = dot == std::string::npos ? f.key : f.key.substr(dot + 1);

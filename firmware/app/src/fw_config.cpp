@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "lever/program/text.hpp"
 
 namespace lever::app {
@@ -361,5 +363,37 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   if (!fw::is_valid(l)) return fail("(several keys)", "the combination is not valid");
   return out;
 }
+
+MotorKeys load_motor_keys(const std::string& path) {
+  constexpr std::string_view kMotor = "board.motor.";
+  MotorKeys out;
+  FwConfig config;
+  auto each = schema_for(config).load_file_each(path);
+  // The motor's problems first: they are the ones that decide.
+  std::stable_partition(each.begin(), each.end(),
+                        [&](const ConfigSchema::KeyProblem& p) { return p.key.empty() || p.key.starts_with(kMotor); });
+  bool motor_readable = true;
+  for (const auto& p : each) {
+    if (p.key.empty() || p.key.starts_with(kMotor)) motor_readable = false;
+    out.problems.push_back(p.message);
+  }
+  if (motor_readable) {
+    const auto motor = motor_config(config.board);
+    if (const auto invalid = motor.validate(); !invalid.empty()) {
+      for (const auto& p : invalid)
+        out.problems.insert(out.problems.begin(), fmt::format("{}: board.motor: {}", path, p));
+    } else {
+      out.motor = motor;
+    }
+  }
+  // What one key cannot say alone, said once every key has loaded.
+  if (each.empty()) {
+    if (auto whole = load_fw_config(path); !whole.error.empty() && (out.motor || out.problems.empty()))
+      out.problems.push_back(whole.error);
+  }
+  return out;
+}
+
+std::string motor_keys_toml(FwConfig config) { return schema_for(config).print("board.motor."); }
 
 }  // namespace lever::app

@@ -28,7 +28,7 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 int main(int argc, char** argv) {
   CLI::App app{"lever-fw: the firmware of one lever of the haptic teleoperation testbed (HSI or TOP)."};
   program::describe(app, "lever-fw");
-  std::string config_path, can;
+  std::string config_path, can, motor_state;
   std::optional<protocol::Role> role;
   bool check_config = false, stats_json = false, motor_off = false;
   app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")
@@ -44,7 +44,14 @@ int main(int argc, char** argv) {
                "stop the board's motor (PWM disabled at duty 0, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
       ->excludes("--check-config");
+  app.add_option("--motor-state", motor_state,
+                 "a file naming the motor: written at start, before the motor is opened; read by --motor-off when "
+                 "the configuration's motor keys cannot be (the service: /run/lever/INSTANCE/motor)")
+      ->check(program::path());
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
+
+  // Before the configuration is validated: the motor must stop whatever else in the file is wrong.
+  if (motor_off) return app::motor_off(config_path, motor_state);
 
   std::optional<std::string> can_override;
   if (app.count("--can") > 0) can_override = can;
@@ -59,8 +66,7 @@ int main(int argc, char** argv) {
                app::schema_for(config).print());
     return 0;
   }
-  if (motor_off) return app::motor_off(config);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  return app::run_board(config, stats_json, g_stop);
+  return app::run_board(config, stats_json, motor_state, g_stop);
 }

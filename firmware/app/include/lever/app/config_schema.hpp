@@ -70,8 +70,19 @@ class ConfigSchema {
   // "SOURCE: KEY: problem" on a problem.
   std::optional<std::string> load_value(const std::string& key, const toml::node& value, const std::string& source);
 
-  // The effective configuration as a TOML document, every key with its unit and documentation.
-  std::string print() const;
+  // Every problem of a file rather than the first: each key that loads is kept, each that does not is listed
+  // ("FILE: KEY: problem", the key also apart; an empty key for a problem of the whole file, which then loads
+  // nothing). For a reader that needs some keys only and must go on whatever else is wrong (--motor-off).
+  struct KeyProblem {
+    std::string key;
+    std::string message;
+  };
+  std::vector<KeyProblem> load_file_each(const std::string& path);
+  std::vector<KeyProblem> load_string_each(std::string_view text, const std::string& source_name);
+
+  // The effective configuration as a TOML document, every key with its unit and documentation; with a prefix
+  // ("board.motor."), only the keys that start with it.
+  std::string print(std::string_view prefix = {}) const;
 
  private:
   struct Field {

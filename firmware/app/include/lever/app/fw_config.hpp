@@ -108,4 +108,17 @@ struct LoadedConfig {
 };
 LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides = {});
 
+// The motor's keys alone ([board.motor]), read from a file whatever else in it is wrong: what --motor-off needs.
+// `motor` is empty when they cannot be had (the file unreadable or not TOML, a motor key wrong, the motor's
+// configuration invalid); `problems` lists every problem the file has, the motor's keys' first.
+struct MotorKeys {
+  std::optional<platform::PwmMotorConfig> motor;
+  std::vector<std::string> problems;
+};
+MotorKeys load_motor_keys(const std::string& path);
+
+// The [board.motor] keys of a configuration as a TOML file of their own, which load_motor_keys reads back: the
+// motor state lever-fw writes at start (--motor-state) for a --motor-off that cannot read the configuration.
+std::string motor_keys_toml(FwConfig config);
+
 }  // namespace lever::app
