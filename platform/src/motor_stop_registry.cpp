@@ -1,11 +1,13 @@
 #include "motor_stop_registry.hpp"
 
 #include <sched.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <cstdint>
 #include <cstdlib>
 
 #include "sysfs_write.hpp"
@@ -19,6 +21,7 @@ struct Slot {
   std::atomic<int> duty_fd{-1};
   std::atomic<int> enable_fd{-1};
   std::atomic<pid_t> owner{0};
+  std::atomic<pid_t> commanding{0};  // the thread in a command of this motor, 0: none
 };
 
 std::array<Slot, kMaxStoppableMotors> slots;
@@ -30,13 +33,33 @@ std::atomic<bool> exit_hook_installed{false};
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free &&
               std::atomic<pid_t>::is_always_lock_free);
 
+std::int64_t monotonic_ms() noexcept {
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1000 + now.tv_nsec / 1'000'000;
+}
+
+// Until the command in progress on another thread has ended, or the wait's bound.
+void wait_for_command(const Slot& slot, pid_t this_thread, std::int64_t deadline_ms) noexcept {
+  for (;;) {
+    const pid_t in_command = slot.commanding.load();
+    if (in_command == 0 || in_command == this_thread || monotonic_ms() > deadline_ms) return;
+    ::sched_yield();
+  }
+}
+
 void stop_slots(bool only_own) noexcept {
   const int saved_errno = errno;
+  // The latch before looking at the commands, each command's mark before it looks at the latch (both sequentially
+  // consistent): a command either sees the latch and writes nothing but a stop, or is seen here and waited for.
   latched.store(true);
   stops_running.fetch_add(1);
   const pid_t self = only_own ? ::getpid() : 0;
+  const pid_t this_thread = ::gettid();
+  const std::int64_t deadline_ms = monotonic_ms() + kCommandWaitMs;
   for (Slot& slot : slots) {
     if (only_own && slot.owner.load() != self) continue;
+    wait_for_command(slot, this_thread, deadline_ms);
     const int duty = slot.duty_fd.load();
     const int enable = slot.enable_fd.load();
     if (duty >= 0) write_decimal(duty, 0);
@@ -77,6 +100,16 @@ void unregister_motor_stop(int slot_index) noexcept {
   while (stops_running.load() != 0) ::sched_yield();
   slot.owner.store(0);
   slot.taken.store(false);
+}
+
+void begin_motor_command(int slot_index) noexcept {
+  if (slot_index < 0 || static_cast<std::size_t>(slot_index) >= slots.size()) return;
+  slots[static_cast<std::size_t>(slot_index)].commanding.store(::gettid());
+}
+
+void end_motor_command(int slot_index) noexcept {
+  if (slot_index < 0 || static_cast<std::size_t>(slot_index) >= slots.size()) return;
+  slots[static_cast<std::size_t>(slot_index)].commanding.store(0);
 }
 
 void emergency_stop_registered_motors() noexcept { stop_slots(false); }

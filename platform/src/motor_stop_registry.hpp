@@ -14,7 +14,17 @@ int register_motor_stop(int duty_fd, int enable_fd) noexcept;
 // closed and their numbers reused right after).
 void unregister_motor_stop(int slot) noexcept;
 
-// Async-signal-safe: atomics and pwrite only; errno is preserved. Latches: motors stay stopped afterwards.
+// A motor command's writes go between these two. An emergency stop waits for a command in progress on another
+// thread to end (at most kCommandWaitMs: a write stuck in the kernel must not hold the stop for ever) before it
+// writes, so that none of the command's writes lands after its own; the command, seeing the latch at its end,
+// stops the motor itself. A command interrupted by the stop on its own thread cannot be waited for: it stops the
+// motor again at its end, unless the process dies first (a crash handler), when nothing of it is written.
+inline constexpr long kCommandWaitMs = 100;
+void begin_motor_command(int slot) noexcept;
+void end_motor_command(int slot) noexcept;
+
+// Async-signal-safe: atomics, clock_gettime, sched_yield and pwrite only; errno is preserved. Latches: motors stay
+// stopped afterwards.
 void emergency_stop_registered_motors() noexcept;
 bool emergency_stop_latched() noexcept;
 

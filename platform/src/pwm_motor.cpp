@@ -41,10 +41,9 @@ struct PwmMotor::Impl {
       if (!pwm.set_duty_ns(0) || !lines.set_negative(setpoint.negative)) return false;
       stats.negative = setpoint.negative;
     }
-    bool ok = pwm.set_duty_ns(setpoint.duty_ns);
-    ok &= pwm.set_enabled(true);
-    ok &= lines.set_enabled(true);
-    return ok;
+    // Each step only after the one before it took: a PWM in an unknown state is never enabled, nor the driver
+    // behind it.
+    return pwm.set_duty_ns(setpoint.duty_ns) && pwm.set_enabled(true) && lines.set_enabled(true);
   }
 
   bool release() noexcept {
@@ -52,6 +51,12 @@ struct PwmMotor::Impl {
     ok &= pwm.set_duty_ns(0);
     ok &= pwm.set_enabled(false);
     return ok;
+  }
+
+  // After an emergency stop that came while this command wrote: its writes, whatever the last ones were.
+  void stop_again() noexcept {
+    lines.set_enabled(false);
+    pwm.stop();
   }
 };
 
@@ -82,6 +87,7 @@ void PwmMotor::command(const fw::MotorCommand& command) noexcept {
   if (!impl_) return;
   Impl& m = *impl_;
   ++m.stats.commands;
+  begin_motor_command(m.stop_slot);
   const bool enable = command.enable && !emergency_stop_latched();
   const DutySetpoint setpoint = enable ? m.map(command.torque_nm) : DutySetpoint{};
   // Only changed values are written, so a lever at rest writes nothing and would not notice its PWM channel
@@ -93,8 +99,13 @@ void PwmMotor::command(const fw::MotorCommand& command) noexcept {
   bool ok = enable ? m.drive(setpoint) : m.release();
   // A duty that could not be written is not driven: the driver goes off in this call, a period before the core
   // would see driver_fault() and latch motor_driver, and never stays enabled behind a PWM in an unknown state.
-  const bool driven = enable && ok;
+  bool driven = enable && ok;
   if (enable && !ok) m.release();
+  if (enable && emergency_stop_latched()) {
+    m.stop_again();
+    driven = false;
+  }
+  end_motor_command(m.stop_slot);
   m.stats.duty_ns = driven ? setpoint.duty_ns : 0;
   m.stats.enabled = driven;
   m.last_command_failed = !ok;

@@ -2,12 +2,16 @@
 // unchanged values left alone, and the motor stopped on every way out: destruction, exit(), the emergency
 // stop, SIGINT and SIGTERM, abort(). The GPIO lines are tested in the kernel rig (test_pwm_motor_gpio_sim.cpp);
 // here the motor has none, so it is configured positive_torque_only.
+#include <sys/resource.h>
+
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -16,6 +20,7 @@
 #include "lever/platform/pwm_motor.hpp"
 #include "lever/platform/torque_to_duty.hpp"
 #include "pwm_sysfs_tree.hpp"
+#include "pwrite_pause.hpp"
 
 using lever::fw::MotorCommand;
 using lever::platform::LineRef;
@@ -240,6 +245,46 @@ TEST_CASE("PwmMotor: an unchanged duty is written again every kConfirmEvery comm
   CHECK(tree.read("enable") == "1");
 }
 
+// In a child: from here on no write may grow a file past `bytes` (the writes fail with EFBIG, partly done), so
+// that a PWM attribute the motor holds open refuses values longer than that, as a channel gone does.
+bool limit_writes_to(rlim_t bytes) {
+  std::signal(SIGXFSZ, SIG_IGN);
+  const rlimit limit{bytes, bytes};
+  return ::setrlimit(RLIMIT_FSIZE, &limit) == 0;
+}
+
+TEST_CASE("PwmMotor: a duty that cannot be written is never driven: the enable is not raised behind it", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = open_or_fail(config_for(tree));
+    // Disabled since open(): any write to enable in the next command could only raise it (and lower it again).
+    tree.overwrite("enable", "untouched\n");
+    if (!limit_writes_to(3)) return 80;  // "15000\n" cannot be written, "1\n" and "0\n" can
+    motor.command({0.3, true});
+    if (tree.read("enable") != "untouched") return 1;
+    if (motor.stats().enabled || motor.stats().failed_commands != 1) return 2;
+    if (!motor.driver_fault()) return 3;
+    return 0;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+}
+
+TEST_CASE("PwmMotor: a driven motor whose new duty cannot be written is released in that command", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = driving_motor(tree);  // 15000 ns, enabled
+    if (!limit_writes_to(3)) return 80;
+    motor.command({0.4, true});  // "20000\n": refused
+    if (tree.read("enable") != "0") return 1;
+    if (motor.stats().enabled || motor.stats().duty_ns != 0) return 2;
+    if (!motor.driver_fault()) return 3;
+    return 0;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+}
+
 TEST_CASE("PwmMotor: a command allocates nothing", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   PwmMotor motor = open_or_fail(config_for(tree));
@@ -282,6 +327,53 @@ TEST_CASE("PwmMotor: the emergency stop zeroes every open motor at once and latc
     motor.command({0.5, true});  // latched: still off
     if (!stopped(tree)) return 3;
     return 0;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(stopped(tree));
+}
+
+// A crash handler's stop on one thread while the loop's thread is in the middle of a command (a multicore board):
+// no write of the command may land after the stop's, since the process may die right after its handler's stop
+// and nothing would write again. The loop's thread is held inside its write of enable 1 (a pause in pwrite,
+// pwrite_pause.hpp) while the other thread stops every motor: the stop must return only once that write is done
+// and with the motor stopped. In a child: the stop latches for the process.
+TEST_CASE("PwmMotor: a loop thread in the middle of a command cannot undo the emergency stop", "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = driving_motor(tree);
+    motor.command({0.0, false});
+    lever::test::pause_next_pwrite_of("1\n", std::chrono::milliseconds(30));
+    std::thread loop([&] {
+      motor.command({0.3, true});  // duty, then enable 1: held there
+      while (!motor.driver_fault()) motor.command({0.3, true});
+    });
+    while (!lever::test::pwrite_paused()) std::this_thread::yield();
+    PwmMotor::emergency_stop_all();
+    const bool write_done_on_return = lever::test::pwrite_resumed();
+    const bool stopped_on_return = stopped(tree);
+    loop.join();
+    if (!write_done_on_return) return 1;
+    if (!stopped_on_return) return 2;
+    return stopped(tree) ? 0 : 3;
+  });
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(stopped(tree));
+}
+
+// The same stop from a signal handler on the loop's own thread, which cannot wait for the command it interrupted:
+// the command, its writes done, finds the latch and stops the motor again.
+TEST_CASE("PwmMotor: a command interrupted by the emergency stop on its own thread stops the motor at its end",
+          "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  const int status = wait_status_of_child([&] {
+    PwmMotor motor = driving_motor(tree);
+    motor.command({0.0, false});
+    lever::test::pause_next_pwrite_of("1\n", std::chrono::milliseconds(0), [] { PwmMotor::emergency_stop_all(); });
+    motor.command({0.3, true});
+    if (!lever::test::pwrite_resumed()) return 1;
+    return stopped(tree) ? 0 : 2;
   });
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 0);

@@ -46,9 +46,11 @@ class PwmMotor {
   ~PwmMotor();
 
   // MotorPort. Enabled: direction (through zero duty when the sign changes), duty, PWM enable, then the
-  // driver's enable line. Disabled: the enable line first, then duty 0 and PWM disable. Only values that
-  // changed are written, each with one pwrite or one ioctl on a file opened at open(); no allocation.
-  // After an emergency stop every command is a disabled one.
+  // driver's enable line, each only once the one before it was written: a failed write releases the motor in
+  // the same command and nothing after it is raised. Disabled: the enable line first, then duty 0 and PWM
+  // disable. Only values that changed are written, each with one pwrite or one ioctl on a file opened at open();
+  // no allocation. After an emergency stop every command is a disabled one; a command that was writing when the
+  // stop came stops the motor again at its end.
   void command(const fw::MotorCommand& command) noexcept;
   // The fault line asserted, the line unreadable, the last command's writes failed, or an emergency stop.
   bool driver_fault() noexcept;
@@ -57,8 +59,11 @@ class PwmMotor {
   // "pwmchip0/pwm1 20000 Hz enable_line=gpiochip1:3 ...", for the log line at start.
   const std::string& description() const noexcept;
 
-  // Writes duty 0 and disable to the PWM of every open motor in this process, now, and latches: their later
-  // commands are disabled ones. Async-signal-safe: pwrite on files opened beforehand, and atomics. The enable
+  // Writes duty 0 and disable to the PWM of every open motor in this process, and latches: their later
+  // commands are disabled ones. A command in progress on another thread (the loop's, on a multicore board) is
+  // waited for first, at most 100 ms, so that none of its writes lands after the stop's and undoes it when the
+  // process dies right after (a crash handler). Async-signal-safe: pwrite on files opened beforehand, atomics,
+  // clock_gettime and sched_yield. The enable
   // lines are not touched here (a line is set with an ioctl through libgpiod, not a write); they go off at the
   // next command(), or in the destructor. A disabled PWM at zero duty already means no torque.
   static void emergency_stop_all() noexcept;
