@@ -3,12 +3,15 @@
 // makes two chips and sets LEVER_ENC_CHIP (lines 0 "enc-a", 1 "enc-b", 2 "enc-z") and LEVER_MOT_CHIP (lines
 // 0 "mot-en", 1 "mot-dir", 2 "mot-fault"), each the chip's label. The guest's clock is emulated and slow: the
 // tests assert what arrives, never how fast, and wait generously.
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <array>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +29,7 @@ using lever::fw::EncoderEdge;
 using lever::hil::devices::EncoderLines;
 using lever::hil::devices::EncoderLinesOptions;
 using lever::hil::devices::MotorReadback;
+using lever::hil::devices::ReleasedLines;
 using lever::platform::GpioEncoder;
 using lever::platform::GpioEncoderConfig;
 using lever::platform::LineRef;
@@ -258,7 +262,8 @@ TEST_CASE("motor readback: sign from the direction line, enable from the line an
     CHECK(std::abs(readback.read().torque_nm - -0.6) <= kQuantum);
     CHECK(readback.read_errors() == 0);
   }
-  // The motor's destructor stops it, and its released enable line falls back to the pull.
+  // The motor's destructor stops it: the PWM disabled. (Its enable line's low level, driven for less than the
+  // time between two reads before it is released, is not seen: the world holds the line where it last saw it.)
   CHECK_FALSE(readback.read().enabled);
   CHECK(readback.read().torque_nm == 0.0);
 }
@@ -276,4 +281,53 @@ TEST_CASE("motor readback: the enable line alone decides when the PWM runs") {
   std::ofstream(dir.path() + "/class/pwm/pwmchip0/pwm0/duty_cycle") << "25000\n";
   CHECK_FALSE(readback.read().enabled);
   CHECK(readback.read().torque_nm == 0.0);
+}
+
+// A lever-fw killed (SIGKILL) while it drives: nothing of it runs, and the kernel releases its lines. A real GPIO
+// controller keeps the enable line where it was, so the motor runs on until something else stops it; the world
+// must show that (ReleasedLines::hold), or a test of that something passes without it. With ::pull the line
+// falls to the board's resistor, as gpio-sim on its own does.
+TEST_CASE("motor readback: a line released by a killed program keeps its level, or falls to its pull") {
+  const auto released = GENERATE(ReleasedLines::hold, ReleasedLines::pull);
+  CAPTURE(released == ReleasedLines::hold ? "hold" : "pull");
+  TempDir dir;
+  const PwmMotorConfig config = motor_config(dir.path(), false);
+  MotorReadback readback = opened(MotorReadback::open(config, released));
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    auto motor = PwmMotor::open(config);
+    if (!motor) ::_exit(90);
+    motor.value().command({-0.4, true});
+    (void)!::write(ready[1], "x", 1);
+    for (;;) ::pause();
+  }
+  ::close(ready[1]);
+  char byte = 0;
+  REQUIRE(::read(ready[0], &byte, 1) == 1);
+  ::close(ready[0]);
+  auto r = readback.read();  // the world's tick while the program drives
+  REQUIRE(r.enabled);
+  REQUIRE(r.negative);
+  ::kill(child, SIGKILL);
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  r = readback.read();
+  if (released == ReleasedLines::hold) {
+    CHECK(r.enabled);
+    CHECK(r.negative);
+    CHECK(std::abs(r.torque_nm - -0.4) <= 1.0 / 50'000);
+  } else {
+    CHECK_FALSE(r.enabled);
+    CHECK(r.torque_nm == 0.0);
+  }
+  // What stops it then: another process opening the motor (lever-fw --motor-off), whose stop the world sees.
+  {
+    PwmMotor off = opened(PwmMotor::open(config));
+    CHECK_FALSE(readback.read().enabled);
+  }
+  CHECK_FALSE(readback.read().enabled);
+  CHECK(readback.read_errors() == 0);
 }

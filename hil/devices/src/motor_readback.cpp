@@ -56,6 +56,7 @@ std::optional<bool> read_inversed(int fd) noexcept {
 struct Line {
   SimLine sim;
   bool active_low = false;
+  bool pull_high = false;  // as last set
   bool asserted_is_high() const noexcept { return !active_low; }
 };
 
@@ -77,6 +78,7 @@ struct MotorReadback::Impl {
   std::optional<Line> direction_line;
   std::optional<Line> fault_line;
   bool board_inverts = false;
+  bool hold_released = true;
   double full_duty_nm = 0.0;
   std::string description;
 
@@ -141,18 +143,27 @@ struct MotorReadback::Impl {
       take(read_inversed(polarity.get()), inversed);
     }
   }
-  void take_line(const std::optional<Line>& line, bool& asserted) noexcept {
+  void take_line(std::optional<Line>& line, bool& asserted) noexcept {
     if (!line) return;
     const std::optional<bool> level = line->sim.level();
-    if (level) {
-      asserted = *level == line->asserted_is_high();
-    } else {
+    if (!level) {
       ++read_errors;
+      return;
+    }
+    asserted = *level == line->asserted_is_high();
+    // A level the pull does not give is a program driving the line: the pull takes it, and keeps it when the
+    // program lets go. (On a line nobody drives the level is the pull's, so this writes nothing.)
+    if (hold_released && *level != line->pull_high) {
+      if (line->sim.drive(*level)) {
+        line->pull_high = *level;
+      } else {
+        ++read_errors;
+      }
     }
   }
 };
 
-platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConfig& config) {
+platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConfig& config, ReleasedLines released) {
   if (const auto problems = config.validate(); !problems.empty())
     return platform::config_error("motor readback", problems);
   auto impl = std::make_unique<Impl>();
@@ -179,7 +190,8 @@ platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConf
     if (!opened) return opened.error();
     l.line.emplace(std::move(opened).value());
     // Deasserted: a resistor's level on the driver's inputs, and the fault output not reporting.
-    if (!l.line->sim.drive(!l.line->asserted_is_high())) {
+    l.line->pull_high = !l.line->asserted_is_high();
+    if (!l.line->sim.drive(l.line->pull_high)) {
       const int err = errno;
       return Error{std::string("motor readback: ") + l.field + " (" + l.line->sim.description() +
                        "): cannot set its pull: " + std::strerror(err),
@@ -188,6 +200,7 @@ platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConf
     impl->description += std::string(", ") + l.field + " " + l.line->sim.description();
   }
   impl->board_inverts = config.pwm_inversed;
+  impl->hold_released = released == ReleasedLines::hold;
   impl->full_duty_nm = config.gear_ratio * config.torque_constant_nm_per_a * config.full_scale_current_a;
   return MotorReadback(std::move(impl));
 }

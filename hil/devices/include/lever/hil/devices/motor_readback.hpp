@@ -25,14 +25,29 @@ struct MotorReading {
   bool negative = false;  // the direction line asserted (false without one)
 };
 
+// What the board's GPIO controller does with an output its program released (closed, or the program died): most
+// SoC controllers keep driving its last level, which is the hazard the unit's ExecStopPost exists for; a
+// controller that frees a pin to an input leaves it to the board's resistor. gpio-sim does the latter (its
+// `free` sets the line to its pull); `hold` makes it do the former.
+enum class ReleasedLines {
+  hold,  // the enable and direction lines keep their last level: their pull follows what the program drives
+  pull,  // they fall to the board's resistor (deasserted)
+};
+
 class MotorReadback {
  public:
   // Validates the config as PwmMotor does; refuses a sysfs_root that is /sys or under it; makes the PWM tree
   // (make_fake_pwm_channel: what exists is kept, what is missing made disabled); finds the lines on their
   // gpio-sim chips; sets the enable and direction lines' pulls to deasserted (the board's resistors: the level
-  // they show while no program drives them, and again after one dies, as gpio-sim frees a line to its pull)
+  // they show before any program drives them, and with ReleasedLines::pull again after one is done with them)
   // and drives the fault input deasserted. Fails naming the file or field and the reason.
-  static platform::Result<MotorReadback> open(const platform::PwmMotorConfig& config);
+  //
+  // With ReleasedLines::hold each read() that finds an output line at a level its pull does not give sets the
+  // pull to it, so that when the program releases the line gpio-sim leaves it there. The level is sampled: one
+  // a program drives for less than the time between two reads and then releases is not seen, and the line keeps
+  // the level it had before.
+  static platform::Result<MotorReadback> open(const platform::PwmMotorConfig& config,
+                                              ReleasedLines released = ReleasedLines::hold);
 
   MotorReadback(MotorReadback&&) noexcept;
   MotorReadback& operator=(MotorReadback&&) noexcept;
@@ -40,8 +55,9 @@ class MotorReadback {
   MotorReadback& operator=(const MotorReadback&) = delete;
   ~MotorReadback();
 
-  // One pread per attribute and line, on files held open; no allocation. The world calls it every tick. A value
-  // that cannot be read or parsed (counted in read_errors()) is taken as last read.
+  // One pread per attribute and line, on files held open (and a pwrite when a held line's level changed); no
+  // allocation. The world calls it every tick. A value that cannot be read or parsed (counted in read_errors())
+  // is taken as last read.
   MotorReading read() noexcept;
 
   // Asserts (or releases) the driver's fault output: drives the fault line to its asserted level (respecting
