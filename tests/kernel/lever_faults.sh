@@ -4,7 +4,8 @@
 # injection to the lever's safe state as its motor shows it, against a bound from the configuration:
 #   the TOP stopped (SIGSTOP) for less than a period (no fault: the timing budget spends it) and for 4, 20 and
 #   50 ms; the CAN interface down and up again; the Modbus gauge server gone and back; the TOP killed (SIGKILL)
-#   and its motor stopped by `lever-fw --motor-off`, as the service's ExecStopPost does; the TOP's PWM channel
+#   and its motor stopped by `lever-fw --motor-off` (its configuration cut in half meanwhile), as the service's
+#   ExecStopPost does; the TOP's PWM channel
 #   unexported under it; the HSI's gpio-sim chip removed.
 # The safe state, read from the devices: the HSI's motor off (its PWM controller disabled or at duty 0, or its
 # driver's enable line low); for the TOP the same, and where its rule is to hold for safe_hold_ms first, no sooner.
@@ -149,11 +150,25 @@ stop_top() {  # stop_top SECONDS: SIGSTOP, a builtin sleep, SIGCONT; sets t0 and
   stopped_us=$((now - t0))
 }
 # Below the bound: stopped for less than a period, the TOP loses at most one period, which its budget spends.
+# Judged on status lines taken after the stop only: the first line printed after SIGCONT may carry a snapshot from
+# before it (the loop publishes one every 100 ms, the printer prints the newest once a second), the second cannot.
+stat_lines() { local n=0 line; while IFS= read -r line; do n=$((n + 1)); done <"$out/$1.stats"; echo "$n"; }
+# wait_after SECONDS ROLE MARK CONDITION: the lever has printed 2 status lines past line MARK, and its newest
+# satisfies the condition
+wait_after() {
+  local deadline=$((SECONDS + $1))
+  while ((SECONDS < deadline)); do
+    (($(stat_lines "$2") >= $3 + 2)) && break
+    sleep 0.2
+  done
+  (($(stat_lines "$2") >= $3 + 2)) || { echo "no second status line of $2 after line $3 within $1 s" >&2; return 1; }
+  [[ $(last_stat "$2" "$4") == true ]] || { echo "$2's status after the stop: $(last_line "$out/$2.stats")" >&2; return 1; }
+}
 stop_top 0.0004
+mark=$(stat_lines top)
 require "a stop shorter than a period ($(ms_since 0 "$stopped_us") ms)" test "$stopped_us" -lt 1000
-sleep 1
-check "TOP stopped for $(ms_since 0 "$stopped_us") ms: no TIMING, the TOP stays armed" \
-  wait_for 1 top '.state == "armed" and (.faults | index("timing") == null)'
+check "TOP stopped for $(ms_since 0 "$stopped_us") ms: no TIMING, the TOP stays armed (status lines after the stop)" \
+  wait_after 5 top "$mark" '.state == "armed" and (.faults | index("timing") == null)'
 # Above it: TIMING at the first step, and the motor off. A lever moving while its process is stopped may also
 # overflow the kernel's 16-event FIFO of an encoder line (the v1 GPIO interface's, fixed): its count is lost, it
 # latches ENCODER as well, and only homing again makes it whole.
@@ -187,7 +202,8 @@ time_to "vcan0 down: the TOP holds, then its motor off" "$hold_ms" $((comms_ms +
   motor_off top
 poll_rt off
 ip link set vcan0 up
-check "vcan0 down: both latched COMMS" wait_for 5 hsi '.faults | index("comms_timeout") != null'
+check "vcan0 down: the HSI latched COMMS" wait_for 5 hsi '.faults | index("comms_timeout") != null'
+check "vcan0 down: the TOP latched COMMS" wait_for 5 top '.faults | index("comms_timeout") != null'
 rearm "vcan0 down and up"
 
 # 3. The gauge's amplifier gone (serve closes its Modbus server) and back: the TOP's force goes stale.
@@ -204,16 +220,25 @@ require "the gauge serves again" wait_for_serve faults "gauge serves again"
 sleep 0.5
 rearm "gauge server back"
 
-# 4. The TOP killed: nothing of it runs any more; its motor keeps its last duty until the service manager's
-# ExecStopPost (lever-fw --motor-off) stops it. The HSI hears the TOP fall silent.
+# 4. The TOP killed: nothing of it runs any more; its motor keeps its last duty, and its driver's enable line its
+# last level (serve's world holds a released line, as most GPIO controllers do: hil/devices motor_readback.hpp),
+# until the service manager's ExecStopPost (lever-fw --motor-off) stops it. Its configuration was cut in half
+# while it ran (an edit, a full disk): --motor-off stops the motor the lever's motor state names (--motor-state,
+# written at its start). The HSI hears the TOP fall silent.
+cp "$work/top.toml" "$work/top.toml.whole"
+head -c "$(($(wc -c <"$work/top.toml") / 2))" "$work/top.toml.whole" >"$work/top.toml"
 poll_rt on
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-lever-fw --config "$work/top.toml" --motor-off >>"$out/top.err" 2>&1
+lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
+motor_off_code=$?
 time_to "TOP killed, then lever-fw --motor-off: TOP motor off" 0 100 "$t0" motor_off top
 time_to "TOP killed: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
 poll_rt off
+check "lever-fw --motor-off on a configuration cut in half: exit 0 (got $motor_off_code)" test "$motor_off_code" -eq 0
+check "and it stopped the motor its state names" has_text "$out/top.err" "(named by the motor state $out/top.motor)"
+mv "$work/top.toml.whole" "$work/top.toml"
 wait "$top_pid" 2>/dev/null
 restart_top() {  # restart_top WHY: a new TOP process, homed, and the pair re-armed
   start_fw top

@@ -150,9 +150,11 @@ start_serve() {
   return 1
 }
 
-# start_fw ROLE: lever-fw with its status lines in $out/ROLE.stats (appended: a restarted lever goes on)
+# start_fw ROLE: lever-fw with its status lines in $out/ROLE.stats (appended: a restarted lever goes on), and its
+# motor state in $out/ROLE.motor (for a lever-fw --motor-off, as the service's)
 start_fw() {
-  "$bin/lever-fw" --config "$work/$1.toml" --stats-json >>"$out/$1.stats" 2>>"$out/$1.err" &
+  "$bin/lever-fw" --config "$work/$1.toml" --motor-state "$out/$1.motor" --stats-json >>"$out/$1.stats" \
+    2>>"$out/$1.err" &
   eval "${1}_pid=$!"
   pids+=("$!")
 }

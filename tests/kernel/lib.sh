@@ -10,6 +10,13 @@ check() {  # check NAME COMMAND...: run the command, count and print the result
   if "$@"; then passed=$((passed + 1)); echo "ok: $name"; else failed=$((failed + 1)); echo "FAILED: $name" >&2; fi
 }
 
+# jq_true FILE FILTER: the filter gives exactly `true` on FILE (a JSON document; "-" for stdin). Within the filter
+# `num` passes a figure on and fails on anything else, so that a missing figure (null: jq sorts it below every
+# number, and JSON carries a NaN as null) fails the comparison instead of passing it: write
+# `(.latency.x.max | num) <= 2.1`. A jq error (num's included) is a false.
+jq_prelude='def num: if type == "number" and (isnan | not) then . else error("not a figure: \(tojson)") end;'
+jq_true() { [[ $(jq -r "$jq_prelude $2" "$1" 2>/dev/null) == true ]]; }
+
 finish() {  # finish TITLE: the closing line, and the exit status
   echo "$1: $passed passed, $failed failed"
   [[ $failed -eq 0 ]]
