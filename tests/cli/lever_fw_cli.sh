@@ -197,13 +197,21 @@ motor_off_case "file gone" 0 "(named by the motor state $work/run/motor)" "$work
 motor_off_case "a motor key out of range" 0 "(named by the motor state $work/run/motor)" "$work/bad-motor.toml" \
   --motor-state "$work/run/motor"
 motor_off_case "a motor key out of range, no motor state" 1 "board.motor.max_duty: must be" "$work/bad-motor.toml"
-# Edited under the running lever to name another channel: both the one it ran (the state) and the new one stop.
+# Cut short at a line's end, the file is valid TOML without its [board.motor] keys: their defaults would name
+# another motor (pwmchip0 under /sys here). With a state, the state's motor is the one stopped.
+{ printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n'; cat "$work/motor.toml"; } | sed '/^\[board.motor\]/,$d' \
+  >"$work/short.toml"
+motor_off_case "file cut short at a line's end (valid TOML, no motor keys)" 0 \
+  "(named by the motor state $work/run/motor)" "$work/short.toml" --motor-state "$work/run/motor"
+# Edited under the running lever to name another channel: the one it ran (its state) stops; the configuration's
+# new one is not this lever's motor yet, and is left alone (on a machine of two levers it may be the other's).
 mkdir -p "$pwm/pwm1" && for f in enable duty_cycle period polarity; do cp "$pwm/pwm0/$f" "$pwm/pwm1/$f"; done
 sed 's/^pwm_channel = 0/pwm_channel = 1/' "$work/run/motor" >"$work/other.toml"
 printf '1\n' >"$pwm/pwm1/enable"
-motor_off_case "the configuration names another channel than the state" 0 "(named by the motor state" \
-  "$work/other.toml" --motor-state "$work/run/motor"
-check "--motor-off, another channel: that one stopped too" test "$(head -n1 "$pwm/pwm1/enable")" = 0
+motor_off_case "the configuration names another channel than the state" 0 \
+  "the configuration names another motor than the one this lever ran" "$work/other.toml" --motor-state "$work/run/motor"
+check "--motor-off, another channel: the state's stopped, the configuration's left running" \
+  test "$(head -n1 "$pwm/pwm1/enable")" = 1
 "$fw" --config "$work/motor.toml" --motor-off --check-config 2>/dev/null; code=$?
 check "--motor-off with --check-config: exit 2 (got $code)" test "$code" -eq 2
 "$fw" --config "$examples/top.toml" --sim 2>/dev/null; code=$?

@@ -223,14 +223,16 @@ rearm "gauge server back"
 # 4. The TOP killed: nothing of it runs any more; its motor keeps its last duty, and its driver's enable line its
 # last level (serve's world holds a released line, as most GPIO controllers do: hil/devices motor_readback.hpp),
 # until the service manager's ExecStopPost (lever-fw --motor-off) stops it. Its configuration was cut in half
-# while it ran (an edit, a full disk): --motor-off stops the motor the lever's motor state names (--motor-state,
-# written at its start). The HSI hears the TOP fall silent.
+# while it ran (an edit, a full disk; here the cut falls in a comment, so the rest is valid TOML whose motor keys
+# are the defaults: the HSI's PWM chip): --motor-off stops the motor the lever's motor state names (--motor-state,
+# written at its start), not the configuration's. The HSI hears the TOP fall silent.
 cp "$work/top.toml" "$work/top.toml.whole"
 head -c "$(($(wc -c <"$work/top.toml") / 2))" "$work/top.toml.whole" >"$work/top.toml"
 poll_rt on
 clock_now
 t0=$now
 kill -KILL "$top_pid"
+wait "$top_pid" 2>/dev/null  # reaped, its lines released: systemd runs ExecStopPost after that
 lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
 motor_off_code=$?
 time_to "TOP killed, then lever-fw --motor-off: TOP motor off" 0 100 "$t0" motor_off top
@@ -239,7 +241,6 @@ poll_rt off
 check "lever-fw --motor-off on a configuration cut in half: exit 0 (got $motor_off_code)" test "$motor_off_code" -eq 0
 check "and it stopped the motor its state names" has_text "$out/top.err" "(named by the motor state $out/top.motor)"
 mv "$work/top.toml.whole" "$work/top.toml"
-wait "$top_pid" 2>/dev/null
 restart_top() {  # restart_top WHY: a new TOP process, homed, and the pair re-armed
   start_fw top
   require "the TOP restarted ($1) comes up disarmed" wait_for 60 top '.state == "disarmed"'

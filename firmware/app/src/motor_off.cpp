@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <optional>
-#include <vector>
 
 #include "lever/app/fw_config.hpp"
 #include "lever/platform/pwm_motor.hpp"
@@ -37,31 +36,31 @@ bool stop(const platform::PwmMotorConfig& config, const char* named_by) {
 int motor_off(const std::string& config_path, const std::string& state_path) {
   const MotorKeys keys = load_motor_keys(config_path);
   for (const auto& p : keys.problems) fmt::print(stderr, "lever-fw: --motor-off: the configuration: {}\n", p);
-  if (keys.motor && !keys.problems.empty()) {
-    fmt::print(stderr, "lever-fw: --motor-off: its motor keys read, the rest ignored\n");
-  }
 
+  // The state first: it is the running lever's own record of the motor it drove. The configuration may have been
+  // changed since (a file cut short can even be valid TOML, its motor keys then the defaults: another motor).
   std::optional<MotorKeys> state;
   if (!state_path.empty() && (!keys.motor || ::access(state_path.c_str(), F_OK) == 0)) {
     state = load_motor_keys(state_path);
     for (const auto& p : state->problems) fmt::print(stderr, "lever-fw: --motor-off: the motor state: {}\n", p);
   }
-
-  std::vector<std::pair<platform::PwmMotorConfig, std::string>> targets;
-  if (keys.motor) targets.emplace_back(*keys.motor, "the configuration " + config_path);
-  if (state && state->motor && (!keys.motor || !same_motor(*keys.motor, *state->motor)))
-    targets.emplace_back(*state->motor, "the motor state " + state_path);
-  if (targets.empty()) {
-    fmt::print(stderr,
-               "lever-fw: --motor-off: the motor is NOT stopped: the configuration's motor keys cannot be "
-               "read, {}\n",
-               state_path.empty() ? std::string("and no --motor-state names a state file")
-                                  : "nor the motor state " + state_path + "'s");
-    return 1;
+  if (state && state->motor) {
+    if (keys.motor && !same_motor(*keys.motor, *state->motor)) {
+      fmt::print(stderr,
+                 "lever-fw: --motor-off: the configuration names another motor than the one this lever ran, which "
+                 "its motor state names: that one is stopped, the configuration's is left alone\n");
+    }
+    return stop(*state->motor, ("the motor state " + state_path).c_str()) ? 0 : 1;
   }
-  bool all = true;
-  for (const auto& [config, named_by] : targets) all &= stop(config, named_by.c_str());
-  return all ? 0 : 1;
+  if (keys.motor) {
+    if (!keys.problems.empty()) fmt::print(stderr, "lever-fw: --motor-off: its motor keys read, the rest ignored\n");
+    return stop(*keys.motor, ("the configuration " + config_path).c_str()) ? 0 : 1;
+  }
+  fmt::print(stderr,
+             "lever-fw: --motor-off: the motor is NOT stopped: the configuration's motor keys cannot be read, {}\n",
+             state_path.empty() ? std::string("and no --motor-state names a state file")
+                                : "nor the motor state " + state_path + "'s");
+  return 1;
 }
 
 }  // namespace lever::app

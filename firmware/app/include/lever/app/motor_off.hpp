@@ -6,15 +6,17 @@
 
 namespace lever::app {
 
-// Stops the motor the configuration's [board.motor] keys name, whatever else in the file is wrong (each other
-// problem is said on stderr and changes nothing). When those keys cannot be read (the file unreadable, cut in
-// half, a motor key wrong), the motor the state file names (motor_state.hpp; `state_path` empty: none); when
-// both can be read and name different motors, both (the configuration was edited under the running lever).
+// Stops the motor the lever ran: the one its motor state names (motor_state.hpp; `state_path` empty: none), when
+// that file is there and readable, since the configuration may have changed under the running lever (a file cut
+// short can even be valid TOML, its motor keys then the defaults: another motor, maybe another lever's); a
+// configuration that names another motor is said on stderr and its motor left alone. Without a state, the motor
+// the configuration's [board.motor] keys name, whatever else in the file is wrong (each other problem is said on
+// stderr and changes nothing).
 //
 // A stop is an open of the motor: the PWM disabled at duty 0 (written before anything else, so a GPIO line that
 // cannot be had does not keep the PWM running), then the enable and direction lines requested deasserted;
-// closing it leaves them so. Returns the process's exit code: 0 every motor named was stopped, 1 one could not
-// be (or none could be named), the reason on stderr; the PWM writes that went through stand.
+// closing it leaves them so. Returns the process's exit code: 0 the motor was stopped, 1 it could not be (or no
+// motor could be named), the reason on stderr; the PWM writes that went through stand.
 int motor_off(const std::string& config_path, const std::string& state_path);
 
 }  // namespace lever::app

@@ -1,8 +1,8 @@
 #pragma once
 // The motor state file: the [board.motor] keys of the configuration a running lever-fw opened its motor with,
 // written once at start, before the motor is opened (--motor-state; the unit's /run/lever/<instance>/motor). It is
-// what `lever-fw --motor-off` stops when the configuration's own motor keys cannot be read any more (a file cut
-// in half, replaced, unreadable), and what it stops besides when the configuration now names another motor.
+// what `lever-fw --motor-off` stops: the motor this lever ran, whatever the configuration says by then (edited,
+// cut in half, unreadable).
 #include <string>
 
 #include "lever/app/fw_config.hpp"
