@@ -571,3 +571,105 @@ TEST_CASE("a CAN port that reports bus-off latches CAN_BUS at once, and the TOP 
   for (int i = 0; i < 3; ++i) tick();
   CHECK(top.supervisor().armed());  // back once the bus is, by a re-arm
 }
+
+// Resending (docs/can-protocol.md, "Resending"): a host that has not yet seen a lever's heartbeat answer sends the
+// command again, so a copy may reach a lever that already did what it says.
+namespace {
+
+template <typename L>
+std::uint32_t rejected_by(const L& lever) {
+  return lever.counters().commands_rejected;
+}
+
+// Data frames on the bus from `from` on that start a new stream: what an arming does.
+std::size_t restarts_since(const test::CanBus& bus, std::size_t from) {
+  std::size_t n = 0;
+  for (std::size_t i = from; i < bus.log.size(); ++i) {
+    protocol::FrameAddress address;
+    protocol::MotionMessage motion;
+    protocol::ForceMessage force;
+    if (protocol::decode(bus.log[i], motion, address) == protocol::DecodeError::none && motion.flags.restart) ++n;
+    if (protocol::decode(bus.log[i], force, address) == protocol::DecodeError::none && force.flags.restart) ++n;
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("a duplicated arm, re-arm or disarm changes nothing and is not counted as rejected",
+          "[firmware][lever][idempotent]") {
+  PairRig rig;
+  rig.boot_and_arm();
+  rig.run(100);
+  REQUIRE(rig.hsi.supervisor().armed());
+  REQUIRE(rig.top.supervisor().armed());
+  const auto mark = rig.bus.log.size();
+  const auto hsi_rejected = rejected_by(rig.hsi), top_rejected = rejected_by(rig.top);
+  rig.command(Opcode::arm);
+  rig.run(5);
+  rig.command(Opcode::rearm);
+  rig.run(200);
+  CHECK(rig.hsi.supervisor().armed());
+  CHECK(rig.top.supervisor().armed());
+  CHECK(restarts_since(rig.bus, mark) == 0u);  // no new stream: the arming the pair agreed on stands
+  CHECK(rejected_by(rig.hsi) == hsi_rejected);
+  CHECK(rejected_by(rig.top) == top_rejected);
+  rig.command(Opcode::disarm);
+  rig.run(2);
+  rig.command(Opcode::disarm);
+  rig.run(2);
+  CHECK(rig.hsi.supervisor().state() == LeverState::disarmed);
+  CHECK(rig.top.supervisor().state() == LeverState::disarmed);
+  CHECK(rejected_by(rig.hsi) == hsi_rejected);
+  CHECK(rejected_by(rig.top) == top_rejected);
+}
+
+TEST_CASE("a duplicated tare does not restart the average the first copy started", "[firmware][lever][idempotent]") {
+  PairRig rig;
+  rig.run(60);
+  rig.command(Opcode::tare, false, true);
+  rig.run(30);
+  REQUIRE(rig.top.gauge().taring());
+  rig.command(Opcode::tare, false, true);
+  // One fresh reading a tick: the first copy's 64 readings end at tick 64; a restarted average at tick 94.
+  rig.run(40);
+  CHECK_FALSE(rig.top.gauge().taring());
+  CHECK(rejected_by(rig.top) == 0u);
+}
+
+TEST_CASE("a duplicated home neither restarts a homing in progress nor homes a homed lever again",
+          "[firmware][lever][homing][idempotent]") {
+  const auto ticks_to_home = [](bool duplicate) {
+    HomingRig rig;
+    for (int i = 0; i < 60; ++i) rig.tick();
+    rig.command(Opcode::home);
+    int ticks = 0;
+    for (; ticks < 10000 && !rig.top.telemetry().position_valid; ++ticks) {
+      if (duplicate && ticks == 300) {
+        REQUIRE(rig.top.supervisor().state() == LeverState::homing);
+        rig.command(Opcode::home);
+      }
+      rig.tick();
+    }
+    CHECK(rig.top.counters().commands_rejected == 0u);
+    return ticks;
+  };
+  CHECK(ticks_to_home(true) == ticks_to_home(false));
+
+  HomingRig rig;
+  for (int i = 0; i < 60; ++i) rig.tick();
+  rig.command(Opcode::home);
+  for (int i = 0; i < 10000 && !rig.top.telemetry().position_valid; ++i) rig.tick();
+  REQUIRE(rig.top.telemetry().position_valid);
+  rig.tick();
+  rig.command(Opcode::home);  // a copy that arrives after the homing ended
+  bool stayed = true;
+  for (int i = 0; i < 500; ++i) {
+    rig.tick();
+    stayed = stayed && rig.top.supervisor().state() == LeverState::disarmed && rig.top.telemetry().position_valid &&
+             !rig.hal.motor_.last.enable;
+  }
+  CHECK(stayed);
+  CHECK(rig.top.telemetry().position_rad == Approx(rig.angle).margin(0.002));  // the first homing's reference
+  CHECK(rig.top.counters().commands_rejected == 0u);
+}

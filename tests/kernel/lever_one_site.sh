@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs inside the kernel rig in virtual time (run-in-guest --gpio-sim --pwm-sim --virtual-time [--kvaser]): one
 # site. The HSI's and the TOP's lever-fw on one CAN bus, each on its own gpio-sim chip (encoder lines, motor driver
-# lines), its PWM chip, and for the TOP a Modbus TCP strain gauge, all played by lever-hil serve. cansend homes
-# and arms them as an operator's console would; candump records the run, which tools/dbc-decode reads back by
+# lines), its PWM chip, and for the TOP a Modbus TCP strain gauge, all played by lever-hil serve. lever-ctl homes
+# and arms them as an operator would; candump records the run, which tools/dbc-decode reads back by
 # the DBC alone.
 # usage: lever_one_site.sh BIN_DIR [vcan|kvaser]
 #   vcan    both levers on vcan0 (the default)
@@ -30,16 +30,18 @@ one_site one-site --duration 15 --json --trace "$out/one-site.trace.csv"
 
 require "both levers come up disarmed and not homed" wait_for 60 hsi '.state == "disarmed" and (.position_valid | not)'
 require "(TOP too)" wait_for 60 top '.state == "disarmed" and (.position_valid | not)'
-command "$(site_can hsi)" 1  # arm, before homing: refused
+lever_ctl "$(site_can hsi)" arm; code=$?
+check "arm before homing: lever-ctl says a lever refuses it, unhomed (exit $code)" \
+  test "$code" -eq 1 -a "$(grep -c 'refused: .*unhomed' "$out/lever-ctl.log")" -eq 1
 sleep 1
 check "not armed unhomed" test "$(last_stat hsi .state)/$(last_stat top .state)" = disarmed/disarmed
-command "$(site_can hsi)" 6
-require "cansend home: the HSI homes against its end stop" wait_for 120 hsi '.position_valid'
-require "cansend home: the TOP homes against its end stop" wait_for 120 top '.position_valid'
+require "lever-ctl home: both levers' heartbeats say homed" lever_ctl "$(site_can hsi)" home
+require "the HSI homed against its end stop (its status line)" wait_for 120 hsi '.position_valid'
+require "the TOP homed against its end stop" wait_for 120 top '.position_valid'
 check "homed at the stop's position" \
-  test "$(last_stat hsi '.position_rad > -0.7 and .position_rad < 0.5')" = true
-command "$(site_can hsi)" 1
-require "cansend arm: both arm (serve saw both armed heartbeats)" wait_for_serve one-site "both levers armed"
+  stat_true hsi '(.position_rad | num) > -0.7 and (.position_rad | num) < 0.5'
+require "lever-ctl arm: both levers' heartbeats say armed" lever_ctl "$(site_can hsi)" arm
+require "serve saw both armed heartbeats" wait_for_serve one-site "both levers armed"
 
 # Waited for without a poll: no program is started while the scenario runs (repeatability, in lever_sites_lib.sh).
 wait "$serve_pid"; code=$?

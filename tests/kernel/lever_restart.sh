@@ -11,10 +11,10 @@ trap stop_all EXIT
 
 one_site restart --duration 0 --hands-off --json --trace "$out/restart.trace.csv"
 up_and_homed
+require "lever-ctl arm: both levers' heartbeats say armed" lever_ctl vcan0 arm
 mark=$(log_mark "$out/restart.candump")
-command vcan0 1
-require "both arm: the HSI" heard_armed "$out/restart.candump" "$mark" hsi
-require "both arm: the TOP" heard_armed "$out/restart.candump" "$mark" top
+require "candump too: the HSI's heartbeat says armed" heard_armed "$out/restart.candump" "$mark" hsi
+require "and the TOP's" heard_armed "$out/restart.candump" "$mark" top
 sleep 2
 
 kill -KILL "$top_pid"
@@ -31,13 +31,13 @@ start_fw top
 check "restarted, the TOP comes up disarmed and not homed" \
   wait_for 60 top '.state == "disarmed" and (.position_valid | not)'
 check "(a fresh process: its own status lines)" test "$(wc -l <"$out/top.stats")" -gt "$lines_before"
-command vcan0 6
-require "home: the restarted TOP homes" wait_for 120 top '.position_valid'
+require "lever-ctl home: the restarted TOP homes (the HSI, in fault, keeps its position)" lever_ctl vcan0 home
+require "the TOP's status line says homed" wait_for 120 top '.position_valid'
 check "the HSI stays in its safe state meanwhile" test "$(last_stat hsi .state)" = fault
+check "lever-ctl rearm: both levers' heartbeats say armed again" lever_ctl vcan0 rearm
 mark=$(log_mark "$out/restart.candump")
-command vcan0 3
-check "re-arm: the HSI is armed again" heard_armed "$out/restart.candump" "$mark" hsi
-check "re-arm: the restarted TOP is armed again" heard_armed "$out/restart.candump" "$mark" top
+check "candump too: the HSI is armed again" heard_armed "$out/restart.candump" "$mark" hsi
+check "and the restarted TOP" heard_armed "$out/restart.candump" "$mark" top
 kill -TERM "$serve_pid"
 wait "$serve_pid"; code=$?
 check "lever-hil serve exits 0 on SIGTERM (got $code)" test "$code" -eq 0

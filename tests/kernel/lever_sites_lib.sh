@@ -12,8 +12,8 @@
 # 9p to the host, whose I/O is not synchronised with virtual time. collect_results copies it all out at the end.
 #
 # Repeatability: the guest's own timers are deterministic in virtual time, but every program started (a poll's
-# jq, a sleep, cansend) is read from the host over 9p, and lands when the host answers. The steps before a
-# scenario (starting the programs, homing and arming on cansend commands) therefore start at virtual times that
+# jq, a sleep) is read from the host over 9p, and lands when the host answers. The steps before a
+# scenario (starting the programs, homing and arming by lever-ctl) therefore start at virtual times that
 # differ from run to run. What keeps that from reaching the scenario: lever-fw's loops and serve's ticks fall on
 # whole milliseconds of CLOCK_MONOTONIC (one phase however they were started), serve re-seeds the world's noise
 # when the scenario starts, and the tests wait for the scenario's end with `wait`, starting no program while it
@@ -194,18 +194,41 @@ wait_for() {
   return 1
 }
 
-# up_and_homed: both levers up disarmed, then homed on a cansend home command (the checks every pair test starts
-# with; arming is each test's own)
+# up_and_homed: both levers up disarmed, then homed by lever-ctl home (the checks every pair test starts with;
+# arming is each test's own)
 up_and_homed() {
   require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
   require "(TOP too)" wait_for 60 top '.state == "disarmed"'
-  command vcan0 6
-  require "both home" wait_for 120 hsi '.position_valid'
+  require "lever-ctl home: both levers' heartbeats say homed" lever_ctl vcan0 home
+  require "both home (status lines)" wait_for 120 hsi '.position_valid'
   require "(TOP too)" wait_for 120 top '.position_valid'
 }
 
-# command CAN OPCODE: a command frame to both levers of pair 0 (opcodes: 1 arm, 3 rearm, 6 home), by cansend
-command() { cansend "$1" "080#0$2""03000000000000"; }
+# lever_ctl CAN VERB [OPTION...]: the pair (pair 0) operated as a user does, by lever-ctl, which resends the
+# command until both levers' heartbeats show its state; its exit status (0 done, 1 refused or timed out), and
+# its report (which lever, why) in $out/lever-ctl.log and on stdout
+pin_tool lever-ctl "$bin/lever-ctl" || exit 1
+lever_ctl() {
+  local can=$1 verb=$2 code; shift 2
+  lever-ctl "$verb" --pair 0 --can "$can" "$@" >>"$out/lever-ctl.log" 2>&1; code=$?
+  echo "lever-ctl $verb (exit $code): $(last_line "$out/lever-ctl.log")"
+  return "$code"
+}
+
+# command CAN OPCODE: the command to both levers of pair 0 by its opcode (1 arm, 2 disarm, 3 rearm, 6 home), by
+# lever_ctl
+command() {
+  local -A verbs=([1]=arm [2]=disarm [3]=rearm [4]=tare [6]=home)
+  [[ -n ${verbs[$2]:-} ]] || { echo "FAILED: command: no opcode $2" >&2; return 2; }
+  lever_ctl "$1" "${verbs[$2]}"
+}
+
+# jq_true FILE EXPR, stat_true ROLE EXPR: the jq expression is true on the file's JSON, on the lever's newest
+# status line. `num` in EXPR passes a number and stops jq on anything else: jq orders null (a figure that is
+# missing, or NaN as JSON writes it) below every number, so `.x < 0.025` alone holds when x is missing.
+jq_num='def num: if type == "number" and (isnan | not) and (isinfinite | not) then . else error("not a number: \(.)") end; '
+jq_true() { [[ $(jq -r "$jq_num$2" "$1" 2>/dev/null) == true ]]; }
+stat_true() { [[ $(last_line "$out/$1.stats" 2>/dev/null | jq -r "$jq_num$2" 2>/dev/null) == true ]]; }
 
 # pwm_chip ROLE: the number of the lever's PWM chip
 pwm_chip() { [[ $1 == hsi ]] && echo 0 || echo 1; }

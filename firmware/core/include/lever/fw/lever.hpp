@@ -254,7 +254,11 @@ class Lever {
     if (supervisor_.armed() && peer_seen_armed_) peer_left_ = true;
   }
 
+  // Every command is idempotent: a copy that finds the lever already where the command leads (armed, disarmed,
+  // homed or homing, taring) changes nothing and is not counted as rejected, so a host may resend until the
+  // heartbeat shows the state (lever-ctl, docs/can-protocol.md "Resending").
   void on_command(const protocol::CommandMessage& m, Tick now) noexcept {
+    if (already_there(m.opcode)) return;
     bool accepted = true;
     switch (m.opcode) {
       case protocol::Opcode::arm:
@@ -300,6 +304,26 @@ class Lever {
         break;
     }
     if (!accepted) ++counters_.commands_rejected;
+  }
+
+  // A second arm or re-arm would restart the data streams and flip the arming parity; a second home would
+  // throw away a homing's result, or restart one in progress; a second tare would restart the average.
+  bool already_there(protocol::Opcode op) const noexcept {
+    switch (op) {
+      case protocol::Opcode::arm:
+      case protocol::Opcode::rearm:
+        return supervisor_.armed();
+      case protocol::Opcode::disarm:
+        return supervisor_.state() == LeverState::disarmed;
+      case protocol::Opcode::home:
+        return supervisor_.state() == LeverState::homing ||
+               (supervisor_.state() == LeverState::disarmed && position_.valid());
+      case protocol::Opcode::tare:
+        return gauge_.taring();
+      case protocol::Opcode::set_deadband:
+        break;  // the same parameters again: the same configuration, and one more refresh frame
+    }
+    return false;
   }
 
   void clear_encoder_fault() noexcept {

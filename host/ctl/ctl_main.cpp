@@ -1,0 +1,307 @@
+// lever-ctl: operates a lever pair over CAN. It sends a command frame, watches both levers' heartbeats and resends
+// until each lever of the pair shows the commanded state, or refuses it for a reason its heartbeat shows.
+#include <fmt/format.h>
+#include <poll.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <string>
+
+#include "lever/platform/interface_name.hpp"
+#include "lever/platform/socketcan.hpp"
+#include "lever/program/choices.hpp"
+#include "lever/program/numbers.hpp"
+#include "lever/program/parse.hpp"
+#include "lever/program/text.hpp"
+#include "pair_command.hpp"
+
+namespace {
+
+namespace program = lever::program;
+namespace protocol = lever::protocol;
+using lever::ctl::Judgement;
+using lever::ctl::Outcome;
+using lever::ctl::Verb;
+using Clock = std::chrono::steady_clock;
+
+// A heartbeat comes every 25 ms; a command and its answer cross two bridges in 40-odd ms. 100 ms between
+// copies lets one round trip answer before the next copy, and still gives 50 tries within the default timeout.
+constexpr auto kResendInterval = std::chrono::milliseconds(100);
+// A lever silent this long (ten heartbeats) is judged by no heartbeat at all, not by its last one.
+constexpr auto kHeartbeatFresh = std::chrono::milliseconds(250);
+// Unconfirmable commands: this many copies, kResendInterval apart, all within one tare (64 readings at 5 ms).
+constexpr int kUnconfirmedCopies = 3;
+
+struct Options {
+  int pair = 0;
+  std::string can;
+  std::optional<double> timeout_s;
+  // set-deadband
+  protocol::Direction direction = protocol::Direction::motion;
+  lever::codec::Mode mode = lever::codec::Mode::deadband;
+  double p = 0.0, floor = 0.0, filter_hz = 0.0;
+};
+
+int fail(int code, const std::string& message) {
+  fmt::print(stderr, "lever-ctl: {}\n", message);
+  return code;
+}
+
+struct Lever {
+  const char* name;
+  protocol::Role role;
+  bool target = false;
+  std::optional<protocol::HeartbeatMessage> last;
+  Clock::time_point heard{};
+  std::optional<protocol::HeartbeatMessage> fresh(Clock::time_point now) const {
+    if (last && now - heard <= kHeartbeatFresh) return last;
+    return std::nullopt;
+  }
+  std::string silent_for(Clock::time_point now) const {
+    if (!last) return "no heartbeat heard";
+    return fmt::format("no heartbeat for {:.1f} s (last: {})", std::chrono::duration<double>(now - heard).count(),
+                       lever::ctl::describe(*last));
+  }
+};
+
+class Session {
+ public:
+  Session(Verb verb, const Options& o, lever::platform::SocketCan can)
+      : verb_(verb), options_(o), can_(std::move(can)) {
+    const auto t = lever::ctl::targets(verb, o.direction);
+    levers_[0].target = t.hsi;
+    levers_[1].target = t.top;
+  }
+
+  int run() {
+    const auto start = Clock::now();
+    const double timeout_s = options_.timeout_s.value_or(verb_ == Verb::home ? 20.0 : 5.0);
+    const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+    const bool confirmable = lever::ctl::confirmable(verb_);
+    auto next_send = start;
+    int copies_left = kUnconfirmedCopies;
+    bool ready = confirmable;  // unconfirmable commands wait until their levers are up and accept them
+    while (true) {
+      const auto now = Clock::now();
+      const Judgement j[2] = {judge(levers_[0], now), judge(levers_[1], now)};
+      for (int i = 0; i < 2; ++i)
+        if (levers_[i].target && j[i].outcome == Outcome::refused)
+          return fail(1, fmt::format("{} pair {}: {} refused: {}", lever::ctl::verb_name(verb_), options_.pair,
+                                     levers_[i].name, j[i].why));
+      const auto pending = lever::ctl::still_pending({levers_[0].target, levers_[1].target}, j[0], j[1]);
+      if (confirmable && !pending.hsi && !pending.top) {
+        fmt::print("lever-ctl: {} pair {} on {}: done in {:.3f} s, {} command frame{}{}\n",
+                   lever::ctl::verb_name(verb_), options_.pair, can_.interface(),
+                   std::chrono::duration<double>(now - start).count(), sent_, sent_ == 1 ? "" : "s", shown(j));
+        return 0;
+      }
+      if (!confirmable && !ready && !pending.hsi && !pending.top) {
+        ready = true;
+        next_send = now;
+      }
+      if (!confirmable && ready && copies_left == 0) {
+        fmt::print(
+            "lever-ctl: {} pair {} on {}: sent {} copies to {} (up and {}); not confirmed: the heartbeat "
+            "does not show {}\n",
+            lever::ctl::verb_name(verb_), options_.pair, can_.interface(), sent_, target_names(),
+            verb_ == Verb::tare ? "disarmed" : "heard", verb_ == Verb::tare ? "a tare" : "the deadband's parameters");
+        return 0;
+      }
+      if (now >= deadline) return timed_out(j, timeout_s, now);
+      if (now >= next_send && (confirmable ? true : ready)) {
+        // The first copy goes to every target; a resend only to the levers not there yet.
+        const bool to_hsi = sent_ == 0 || !confirmable ? levers_[0].target : pending.hsi;
+        const bool to_top = sent_ == 0 || !confirmable ? levers_[1].target : pending.top;
+        if (const int code = send(to_hsi, to_top); code != 0) return code;
+        if (!confirmable) --copies_left;
+        next_send = now + kResendInterval;
+      }
+      const auto wake = std::min(deadline, (confirmable || ready) ? next_send : deadline);
+      const auto wait_ms = std::chrono::ceil<std::chrono::milliseconds>(wake - Clock::now()).count();
+      pollfd fd{can_.fd(), POLLIN, 0};
+      if (::poll(&fd, 1, static_cast<int>(std::clamp<long long>(wait_ms, 0, 1000))) < 0 && errno != EINTR)
+        return fail(1, fmt::format("poll: {}", std::strerror(errno)));
+      if (const int code = drain(); code != 0) return code;
+    }
+  }
+
+ private:
+  Judgement judge(const Lever& lever, Clock::time_point now) const {
+    const auto heartbeat = lever.fresh(now);
+    Judgement j = lever::ctl::judge(verb_, heartbeat);
+    if (!heartbeat) j.why = lever.silent_for(now);
+    return j;
+  }
+
+  std::string shown(const Judgement (&)[2]) const {
+    std::string out;
+    for (const auto& lever : levers_)
+      if (lever.target && lever.last)
+        out += fmt::format("{}{}: {}", out.empty() ? " (" : "; ", lever.name, lever::ctl::describe(*lever.last));
+    return out.empty() ? out : out + ")";
+  }
+
+  std::string target_names() const {
+    return levers_[0].target && levers_[1].target ? "HSI and TOP" : levers_[0].target ? "HSI" : "TOP";
+  }
+
+  int timed_out(const Judgement (&j)[2], double timeout_s, Clock::time_point) const {
+    std::string why;
+    for (int i = 0; i < 2; ++i)
+      if (levers_[i].target && j[i].outcome != Outcome::done)
+        why += fmt::format("{}{}: {}", why.empty() ? "" : "; ", levers_[i].name, j[i].why);
+    return fail(1,
+                fmt::format("{} pair {}: not done within {} s ({} command frame{}): {}", lever::ctl::verb_name(verb_),
+                            options_.pair, program::short_number(timeout_s), sent_, sent_ == 1 ? "" : "s", why));
+  }
+
+  int send(bool to_hsi, bool to_top) {
+    protocol::CommandMessage m;
+    m.opcode = lever::ctl::opcode(verb_);
+    m.to_hsi = to_hsi;
+    m.to_top = to_top;
+    if (verb_ == Verb::set_deadband) {
+      m.direction = options_.direction;
+      m.mode = options_.mode;
+      m.p = static_cast<std::uint16_t>(std::lround(options_.p / protocol::kPLsb));
+      m.floor = static_cast<std::uint16_t>(std::lround(options_.floor / protocol::kFloorLsb));
+      m.filter_hz = static_cast<std::uint16_t>(std::lround(options_.filter_hz / protocol::kFilterHzLsb));
+    }
+    switch (can_.write(protocol::pack(m, static_cast<std::uint8_t>(options_.pair)))) {
+      case lever::platform::IoStatus::ok:
+        ++sent_;
+        return 0;
+      case lever::platform::IoStatus::would_block:  // the interface's queue is full: the next copy tries again
+        return 0;
+      case lever::platform::IoStatus::interface_down:
+        return fail(1, fmt::format("{} is down", can_.interface()));
+      case lever::platform::IoStatus::interface_gone:
+        return fail(1, fmt::format("{} is gone", can_.interface()));
+      default:
+        return fail(1, fmt::format("sending on {}: {}", can_.interface(), std::strerror(can_.last_errno())));
+    }
+  }
+
+  int drain() {
+    protocol::CanFrame frame;
+    std::int64_t timestamp_us = 0;
+    while (true) {
+      switch (can_.read(frame, timestamp_us)) {
+        case lever::platform::IoStatus::ok:
+          take(frame);
+          continue;
+        case lever::platform::IoStatus::would_block:
+          return 0;
+        case lever::platform::IoStatus::skipped:
+        case lever::platform::IoStatus::error_frame:
+          continue;
+        case lever::platform::IoStatus::interface_down:
+          return fail(1, fmt::format("{} is down", can_.interface()));
+        case lever::platform::IoStatus::interface_gone:
+          return fail(1, fmt::format("{} is gone", can_.interface()));
+        case lever::platform::IoStatus::error:
+          return fail(1, fmt::format("reading {}: {}", can_.interface(), std::strerror(can_.last_errno())));
+      }
+    }
+  }
+
+  // A frame that does not decode is not a heartbeat of this pair's levers, whatever its id says.
+  void take(const protocol::CanFrame& frame) {
+    protocol::HeartbeatMessage m;
+    protocol::FrameAddress address;
+    if (protocol::decode(frame, m, address) != protocol::DecodeError::none || address.pair != options_.pair) return;
+    auto& lever = levers_[address.role == protocol::Role::hsi ? 0 : 1];
+    lever.last = m;
+    lever.heard = Clock::now();
+  }
+
+  Verb verb_;
+  Options options_;
+  lever::platform::SocketCan can_;
+  Lever levers_[2] = {{"HSI", protocol::Role::hsi, false, std::nullopt, {}},
+                      {"TOP", protocol::Role::top, false, std::nullopt, {}}};
+  int sent_ = 0;
+};
+
+void add_common(CLI::App* sub, Options& o) {
+  sub->add_option("--pair", o.pair, "the lever pair, 0-15 (its number in every CAN id)")
+      ->required()
+      ->check(program::whole(0, 15));
+  sub->add_option("--can", o.can, "the SocketCAN interface the pair's levers (or a bridge to them) are on")->required();
+  sub->add_option("--timeout", o.timeout_s,
+                  "seconds to wait for both levers to show the commanded state (default 5; home 20, a homing "
+                  "takes up to 15)")
+      ->check(program::number({0.0, 3600.0, true, false, "a duration in seconds"}));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Operates a lever pair over CAN: sends a command frame to the pair, watches both levers' heartbeats and\n"
+      "resends it every 100 ms until each lever shows the commanded state (armed; disarmed; homed: position\n"
+      "valid), or refuses it for a reason its heartbeat shows (a state or a latched fault the command cannot get\n"
+      "past). Commands are idempotent on the levers, so a resend is harmless (docs/can-protocol.md). Tare and\n"
+      "set-deadband change nothing a heartbeat shows: they are sent three times, 100 ms apart, once their lever is\n"
+      "heard in a state that accepts them, and reported as not confirmed."};
+  program::describe(app, "lever-ctl");
+  app.footer(
+      "Exit status: 0 done (every lever of the pair shows the commanded state; tare and set-deadband: sent to a\n"
+      "lever that accepts them); 1 a lever refused or did not show the state within the timeout (which, and why\n"
+      "from its heartbeat), or the CAN interface failed; 2 bad input (an option, an interface that does not\n"
+      "exist).");
+  Options o;
+  const std::pair<const char*, Verb> verbs[] = {{"arm", Verb::arm},     {"disarm", Verb::disarm},
+                                                {"rearm", Verb::rearm}, {"home", Verb::home},
+                                                {"tare", Verb::tare},   {"set-deadband", Verb::set_deadband}};
+  const char* what[] = {"arm both levers (each must be homed, with no fault latched)",
+                        "disarm both levers (ends a fault's safe behaviour; the faults stay latched)",
+                        "re-arm both levers: clears latched faults whose conditions are gone, and arms",
+                        "home both levers (the ones already homed stay as they are)",
+                        "tare the TOP's strain gauge (the lever disarmed and untouched)",
+                        "set one direction's deadband at its sending end (motion: the HSI, force: the TOP)"};
+  CLI::App* subs[6];
+  for (int i = 0; i < 6; ++i) {
+    subs[i] = app.add_subcommand(verbs[i].first, what[i]);
+    add_common(subs[i], o);
+  }
+  CLI::App* deadband = subs[5];
+  const program::Choices<protocol::Direction> directions{{"motion", protocol::Direction::motion},
+                                                         {"force", protocol::Direction::force}};
+  const program::Choices<lever::codec::Mode> modes{{"deadband", lever::codec::Mode::deadband},
+                                                   {"predictive", lever::codec::Mode::predictive}};
+  deadband->add_option("--direction", o.direction, "motion (HSI to TOP) or force (TOP to HSI)")
+      ->required()
+      ->transform(program::one_of(directions));
+  deadband->add_option("--mode", o.mode, "deadband (zero-order hold) or predictive (linear predictor)")
+      ->transform(program::one_of(modes))
+      ->default_str("deadband");
+  deadband->add_option("--p", o.p, "Weber fraction p: relative deadband, e.g. 0.1 for 10 % (sent in steps of 1e-4)")
+      ->required()
+      ->check(program::number(program::kWeberFraction));
+  deadband->add_option("--floor", o.floor, "absolute deadband floor in rad/s or N, up to 65.535 (steps of 1e-3)")
+      ->check(program::number({0.0, 65.535, false, false, "a floor in signal units"}))
+      ->default_str("0");
+  deadband->add_option("--filter-hz", o.filter_hz, "prefilter cut-off in Hz, steps of 0.1 (default 0: off)")
+      ->check(program::number(program::kCutoffAt1kHz));
+  app.require_subcommand(1);
+
+  if (const auto stop = program::parse(app, argc, argv)) return *stop;
+  Verb verb = Verb::arm;
+  for (int i = 0; i < 6; ++i)
+    if (subs[i]->parsed()) verb = verbs[i].second;
+  if (const auto problem = lever::platform::interface_name_problem(o.can))
+    return fail(2, fmt::format("--can '{}': {}", program::printable(o.can), *problem));
+
+  lever::platform::SocketCanConfig config;
+  config.interface = o.can;
+  config.timestamps = false;
+  for (const auto role : {protocol::Role::hsi, protocol::Role::top})
+    config.filters.push_back({protocol::heartbeat_id(static_cast<std::uint8_t>(o.pair), role), 0x7FF});
+  auto can = lever::platform::SocketCan::open(config);
+  if (!can) return fail(can.error().errno_value == ENODEV ? 2 : 1, can.error().message);
+  return Session(verb, o, std::move(can).value()).run();
+}

@@ -1,0 +1,197 @@
+#include "pair_command.hpp"
+
+#include <fmt/format.h>
+
+namespace lever::ctl {
+
+using protocol::Fault;
+using protocol::HeartbeatMessage;
+using protocol::LeverState;
+
+std::string_view verb_name(Verb verb) noexcept {
+  switch (verb) {
+    case Verb::tare:
+      return "tare";
+    case Verb::home:
+      return "home";
+    case Verb::arm:
+      return "arm";
+    case Verb::disarm:
+      return "disarm";
+    case Verb::rearm:
+      return "rearm";
+    case Verb::set_deadband:
+      return "set-deadband";
+  }
+  return "?";
+}
+
+protocol::Opcode opcode(Verb verb) noexcept {
+  switch (verb) {
+    case Verb::tare:
+      return protocol::Opcode::tare;
+    case Verb::home:
+      return protocol::Opcode::home;
+    case Verb::arm:
+      return protocol::Opcode::arm;
+    case Verb::disarm:
+      return protocol::Opcode::disarm;
+    case Verb::rearm:
+      return protocol::Opcode::rearm;
+    case Verb::set_deadband:
+      return protocol::Opcode::set_deadband;
+  }
+  return protocol::Opcode::disarm;
+}
+
+Targets targets(Verb verb, protocol::Direction direction) noexcept {
+  if (verb == Verb::tare) return {false, true};
+  if (verb == Verb::set_deadband)
+    return {direction == protocol::Direction::motion, direction == protocol::Direction::force};
+  return {true, true};
+}
+
+Targets still_pending(const Targets& t, const Judgement& hsi, const Judgement& top) noexcept {
+  return {t.hsi && hsi.outcome == Outcome::pending, t.top && top.outcome == Outcome::pending};
+}
+
+bool confirmable(Verb verb) noexcept { return verb != Verb::tare && verb != Verb::set_deadband; }
+
+std::string_view state_name(LeverState state) noexcept {
+  switch (state) {
+    case LeverState::init:
+      return "init";
+    case LeverState::disarmed:
+      return "disarmed";
+    case LeverState::armed:
+      return "armed";
+    case LeverState::fault:
+      return "fault";
+    case LeverState::homing:
+      return "homing";
+  }
+  return "?";
+}
+
+std::string fault_names(protocol::FaultBits faults) {
+  std::string names;
+  for (const Fault f : protocol::kAllFaults)
+    if (protocol::has(faults, f)) names += (names.empty() ? "" : ", ") + std::string(protocol::name(f));
+  const auto known = [] {
+    protocol::FaultBits all = 0;
+    for (const Fault f : protocol::kAllFaults) all = static_cast<protocol::FaultBits>(all | protocol::bit(f));
+    return all;
+  }();
+  if (const auto unknown = static_cast<protocol::FaultBits>(faults & ~known); unknown != 0)
+    names += fmt::format("{}unknown bits 0x{:04x}", names.empty() ? "" : ", ", unknown);
+  return names.empty() ? "none" : names;
+}
+
+std::string describe(const HeartbeatMessage& h) {
+  return fmt::format("{}, position {}, faults {}", state_name(h.state), h.position_valid ? "valid" : "not valid",
+                     fault_names(h.faults));
+}
+
+namespace {
+
+Judgement pending(const HeartbeatMessage& h, std::string_view hint) {
+  return {Outcome::pending, fmt::format("{} ({})", describe(h), hint)};
+}
+Judgement refused(const HeartbeatMessage& h, std::string_view why) {
+  return {Outcome::refused, fmt::format("{}: {}", describe(h), why)};
+}
+constexpr Judgement done() { return {Outcome::done, {}}; }
+
+// The rules are the firmware's (firmware/core/include/lever/fw/lever.hpp, on_command; docs/can-protocol.md, "What
+// clears a fault"): refused means no resend of this command can get the lever there.
+Judgement judge_arm(const HeartbeatMessage& h) {
+  switch (h.state) {
+    case LeverState::armed:
+      return done();
+    case LeverState::fault:
+      return refused(h, "arm does not clear a latched fault; rearm does, once its condition is gone");
+    case LeverState::disarmed:
+      if (h.faults != 0) return refused(h, "arm is refused while a fault is latched; rearm clears it");
+      if (!h.position_valid) return refused(h, "an unhomed lever does not arm; home it first");
+      return pending(h,
+                     "the arm has not arrived, or a condition the heartbeat does not show holds: the peer not "
+                     "heard, a stale gauge");
+    case LeverState::homing:
+      return pending(h, "homing: it arms once homed");
+    case LeverState::init:
+      break;
+  }
+  return pending(h, "starting");
+}
+
+Judgement judge_rearm(const HeartbeatMessage& h) {
+  switch (h.state) {
+    case LeverState::armed:
+      return done();
+    case LeverState::fault:
+    case LeverState::disarmed:
+      if (!h.position_valid) return refused(h, "its position is lost: disarm, home, then rearm");
+      return pending(h, "the re-arm has not arrived, or a fault condition still holds");
+    case LeverState::homing:
+      return pending(h, "homing: it re-arms once homed");
+    case LeverState::init:
+      break;
+  }
+  return pending(h, "starting");
+}
+
+Judgement judge_disarm(const HeartbeatMessage& h) {
+  if (h.state == LeverState::disarmed) return done();
+  return pending(h, "the disarm has not arrived");
+}
+
+Judgement judge_home(const HeartbeatMessage& h) {
+  if (h.position_valid && h.state != LeverState::homing) return done();
+  switch (h.state) {
+    case LeverState::fault:
+      return refused(h, has(h.faults, Fault::homing)
+                            ? "homing gave up; disarm, remove what stops it, then home again"
+                            : "home is refused in fault; disarm first (the faults stay latched), then home");
+    case LeverState::homing:
+      return pending(h, "homing");
+    case LeverState::disarmed:
+      return pending(h,
+                     "the home has not arrived, or a fault condition holds: a motor driver fault, a timing "
+                     "fault, a bus fault");
+    case LeverState::armed:
+    case LeverState::init:
+      break;
+  }
+  return pending(h, "starting");
+}
+
+// Unconfirmable commands: "done" means the lever is up and in a state that accepts the command.
+Judgement judge_tare(const HeartbeatMessage& h) {
+  if (h.state == LeverState::disarmed) return done();
+  if (h.state == LeverState::init) return pending(h, "starting");
+  return refused(h, "tare is accepted only while disarmed, the lever untouched");
+}
+
+}  // namespace
+
+Judgement judge(Verb verb, const std::optional<HeartbeatMessage>& heartbeat) {
+  if (!heartbeat) return {Outcome::pending, "no heartbeat heard"};
+  const HeartbeatMessage& h = *heartbeat;
+  switch (verb) {
+    case Verb::arm:
+      return judge_arm(h);
+    case Verb::rearm:
+      return judge_rearm(h);
+    case Verb::disarm:
+      return judge_disarm(h);
+    case Verb::home:
+      return judge_home(h);
+    case Verb::tare:
+      return judge_tare(h);
+    case Verb::set_deadband:
+      return done();  // accepted in any state by the direction's sending end
+  }
+  return {Outcome::pending, "unknown command"};
+}
+
+}  // namespace lever::ctl
