@@ -222,9 +222,11 @@ std::vector<Line> render(const Snapshot& s, const ReaderState& reader, const Scr
   }
   out.push_back({"", Tone::normal});
   out.push_back(
-      {fmt::format("pos, vel: HSI's motion frames; force: TOP's force frames; ~ stale (sender stopped); "
-                   "{}history one sample per 0.1 s",
-                   starred ? "* from the lever's status line (no frame carries it); " : "- no frame carries it; "),
+      {"pos, vel: the HSI's motion frames; force: the TOP's force frames; ~ stale: its sender stopped; "
+       "history: one sample per 0.1 s",
+       Tone::normal});
+  out.push_back(
+      {starred ? "* from the lever's status line: no frame carries it" : "-: no frame carries it (--status adds it)",
        Tone::normal});
   out.push_back({"keys: f or space freeze   r reset counters   q quit", Tone::heading});
   return out;
