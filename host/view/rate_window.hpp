@@ -23,12 +23,14 @@ class RateWindow {
   static std::int64_t bucket_of(std::int64_t t_us) noexcept {
     return t_us >= 0 ? t_us / kBucketUs : -((-t_us + kBucketUs - 1) / kBucketUs);
   }
+  // The window's buckets and the one filling now.
+  static constexpr std::size_t kSlots = kBuckets + 1;
   static std::size_t slot(std::int64_t bucket) noexcept {
-    const auto n = static_cast<std::int64_t>(kBuckets);
+    const auto n = static_cast<std::int64_t>(kSlots);
     return static_cast<std::size_t>(((bucket % n) + n) % n);
   }
 
-  std::array<std::uint64_t, kBuckets> counts_{};
+  std::array<std::uint64_t, kSlots> counts_{};
   std::int64_t newest_ = 0;
   bool started_ = false;
 };

@@ -133,8 +133,11 @@ if [[ $phase == pair || $phase == all ]]; then
 
   wait "$serve_pid"; code=$?
   check "lever-hil serve ran its scenario and exited 0 (got $code)" test "$code" -eq 0
-  # The scenario over, the encoders stand still; the levers fault on the gauge that went with serve (the TOP's
-  # force_stale, then the HSI's peer_state). A disarm ends the data streams: every count is final.
+  # The scenario over, the encoders stand still and the pair stays armed. The TOP's lever-fw stopped for 0.3 s
+  # (SIGSTOP) latches faults on both levers (the HSI's comms_timeout at least); a disarm then ends the data
+  # streams, faults still latched: every count is final.
+  kill -STOP "$top_pid"; sleep 0.3; kill -CONT "$top_pid"
+  require "a lever latched a fault while the TOP stood still" wait_for 30 hsi '.faults | length > 0'
   command vcan0 2
   require "disarmed (HSI)" wait_for 30 hsi '.state == "disarmed"'
   require "(TOP too)" wait_for 30 top '.state == "disarmed"'
@@ -159,9 +162,10 @@ if [[ $phase == pair || $phase == all ]]; then
   done
   # The motion frame carries the position rounded to one encoder count (2 pi/16384 rad); the screen prints four
   # decimals: half a count and half the last digit, 0.00025 rad.
+  # (marked ~: the HSI's stream stopped with the disarm)
   shown=$(row HSI | awk '{ print $4 }') said=$(last_stat hsi .position_rad)
   check "the HSI's position on the screen ($shown) is its status line's ($said)" \
-    test "$(jq -n "(($shown) - ($said) | fabs) <= 0.00025")" = true
+    test "$(jq -n "(\"$shown\" | rtrimstr(\"~\") | tonumber) - ($said) | fabs <= 0.00025")" = true
   # The TOP's position is on no frame: the screen shows its status line's, marked.
   shown=$(row TOP | awk '{ print $4 }') said=$(last_stat top .position_rad)
   check "the TOP's position from its status line, marked * ($shown, status $said)" \

@@ -53,6 +53,15 @@ TEST_CASE("view: a rate window counts the last whole second of events", "[view]"
   CHECK(w.last_second(kT0 + 2'000'000) == 0);
 }
 
+TEST_CASE("view: a rate window read while events still come counts ten whole buckets, not nine", "[view]") {
+  view::RateWindow w;
+  // Read as a screen reads it: in the middle of a steady 1 kHz stream, the newest bucket still filling.
+  for (int i = 0; i < 3000; ++i) {
+    w.add(kT0 + i * 1000);
+    if (i >= 1100 && i % 50 == 0) CHECK(w.last_second(kT0 + i * 1000) == 1000);
+  }
+}
+
 TEST_CASE("view: a sequence counter tells frames lost from frames out of order, across the wrap", "[view]") {
   view::SequenceCounter c;
   for (const int s : {250, 251, 252, 255, 0, 1})
