@@ -42,7 +42,7 @@ protocol::CanFrame heartbeat(Role role, protocol::LeverState state, std::uint8_t
 
 }  // namespace
 
-TEST_CASE("view: a rate window counts the last whole second of events", "[view]") {
+TEST_CASE("a rate window counts the last whole second of events", "[view]") {
   view::RateWindow w;
   for (int i = 0; i < 2000; ++i) w.add(kT0 + i * 1000);  // 1 kHz for 2 s
   CHECK(w.last_second(kT0 + 2'000'000) == 1000);
@@ -53,7 +53,7 @@ TEST_CASE("view: a rate window counts the last whole second of events", "[view]"
   CHECK(w.last_second(kT0 + 2'000'000) == 0);
 }
 
-TEST_CASE("view: a rate window read while events still come counts ten whole buckets, not nine", "[view]") {
+TEST_CASE("a rate window read while events still come counts ten whole buckets, not nine", "[view]") {
   view::RateWindow w;
   // Read as a screen reads it: in the middle of a steady 1 kHz stream, the newest bucket still filling.
   for (int i = 0; i < 3000; ++i) {
@@ -62,7 +62,7 @@ TEST_CASE("view: a rate window read while events still come counts ten whole buc
   }
 }
 
-TEST_CASE("view: a sequence counter tells frames lost from frames out of order, across the wrap", "[view]") {
+TEST_CASE("a sequence counter tells frames lost from frames out of order, across the wrap", "[view]") {
   view::SequenceCounter c;
   for (const int s : {250, 251, 252, 255, 0, 1})
     c.on(static_cast<std::uint8_t>(s));  // 253 and 254 missing; 255 -> 0 wraps
@@ -79,7 +79,7 @@ TEST_CASE("view: a sequence counter tells frames lost from frames out of order, 
   CHECK(c.lost() == 4);
 }
 
-TEST_CASE("view: a 1 kHz stream reads 1000 frames/s, a share of 1 and no savings; half of it 0.5", "[view]") {
+TEST_CASE("a 1 kHz stream reads 1000 frames/s, a share of 1 and no savings, half of it 0.5", "[view]") {
   view::PairMonitor m;
   for (int i = 0; i < 2000; ++i) {
     const std::int64_t t = kT0 + i * 1000;
@@ -108,7 +108,7 @@ TEST_CASE("view: a 1 kHz stream reads 1000 frames/s, a share of 1 and no savings
   CHECK(s.bus.load == Approx(0.2025));
 }
 
-TEST_CASE("view: frames missing from a data stream are lost, a restart is not a loss", "[view]") {
+TEST_CASE("frames missing from a data stream are lost, a restart is not a loss", "[view]") {
   view::PairMonitor m;
   std::int64_t t = kT0;
   for (const int seq : {0, 1, 2, 6, 7, 5})
@@ -121,7 +121,7 @@ TEST_CASE("view: frames missing from a data stream are lost, a restart is not a 
   CHECK(s.pairs[0].motion.restarts == 1);
 }
 
-TEST_CASE("view: heartbeats give each lever's state, homing and latched faults, and their own losses", "[view]") {
+TEST_CASE("heartbeats give each lever's state, homing and latched faults, and their own losses", "[view]") {
   view::PairMonitor m;
   const protocol::FaultBits faults =
       protocol::bit(protocol::Fault::force_stale) | protocol::bit(protocol::Fault::peer_state);
@@ -143,7 +143,7 @@ TEST_CASE("view: heartbeats give each lever's state, homing and latched faults, 
   CHECK(s.pairs[0].levers[0].silent());
 }
 
-TEST_CASE("view: a frame that fails to decode is counted, and other ids are not the protocol's", "[view]") {
+TEST_CASE("a frame that fails to decode is counted, and other ids are not the protocol's", "[view]") {
   view::PairMonitor m;
   auto bad = motion(0, 0, 0);
   bad.dlc = 6;
@@ -159,7 +159,7 @@ TEST_CASE("view: a frame that fails to decode is counted, and other ids are not 
   CHECK(s.pairs.empty());  // nothing of a pair decoded
 }
 
-TEST_CASE("view: --pair shows one pair, while the bus load counts every frame", "[view]") {
+TEST_CASE("one pair shown (--pair), while the bus load counts every frame", "[view]") {
   view::PairMonitor m({1e6, std::uint8_t{3}});
   m.on_frame(motion(0, 0, 0), kT0);  // pair 0
   protocol::MotionMessage mm;
@@ -170,7 +170,7 @@ TEST_CASE("view: --pair shows one pair, while the bus load counts every frame", 
   CHECK(s.bus.frames == 2);
 }
 
-TEST_CASE("view: the history takes the newest value every 0.1 s, and none once the stream is stale", "[view]") {
+TEST_CASE("the history takes the newest value every 0.1 s, and none once the stream is stale", "[view]") {
   view::PairMonitor m;
   for (int i = 0; i < 1000; ++i)
     m.on_frame(motion(static_cast<std::uint8_t>(i), static_cast<std::int16_t>(i), 0), kT0 + i * 1000);
@@ -186,7 +186,7 @@ TEST_CASE("view: the history takes the newest value every 0.1 s, and none once t
   CHECK(later.size() == 15);
 }
 
-TEST_CASE("view: reset zeroes the counters and keeps what the levers said last", "[view]") {
+TEST_CASE("reset zeroes the counters and keeps what the levers said last", "[view]") {
   view::PairMonitor m;
   m.on_frame(heartbeat(Role::hsi, protocol::LeverState::armed, 1), kT0);
   m.on_frame(heartbeat(Role::hsi, protocol::LeverState::armed, 5), kT0 + 1);

@@ -38,7 +38,7 @@ view::PairMonitor armed_pair_with_faulted_top() {
 
 }  // namespace
 
-TEST_CASE("view: lever-fw's and lever-bridge's status lines are read, anything else is not", "[view]") {
+TEST_CASE("lever-fw's and lever-bridge's status lines are read, anything else is not", "[view]") {
   const auto lever = view::parse_status_line(
       R"({"role":"top","pair":2,"state":"armed","faults":["timing"],"position_rad":0.25,"position_valid":true,)"
       R"("velocity_rad_s":-1.5,"force_n":null,"torque_nm":0.75,"data_sent":1234})");
@@ -68,7 +68,7 @@ TEST_CASE("view: lever-fw's and lever-bridge's status lines are read, anything e
     CHECK(std::holds_alternative<std::monostate>(view::parse_status_line(other)));
 }
 
-TEST_CASE("view: the screen names each lever's state, homing and faults, and the data it carries", "[view]") {
+TEST_CASE("the screen names each lever's state, homing and faults, and the data it carries", "[view]") {
   auto m = armed_pair_with_faulted_top();
   const std::string text = screen_of(m.snapshot(kT0 + 10'000));
   CHECK(text.find("pair 0") != std::string::npos);
@@ -81,7 +81,7 @@ TEST_CASE("view: the screen names each lever's state, homing and faults, and the
   CHECK(screen_of(m.snapshot(kT0 + 150'000)).find("silent 0.1s") != std::string::npos);
 }
 
-TEST_CASE("view: what only a status line says is marked as such", "[view]") {
+TEST_CASE("what only a status line says is marked as such", "[view]") {
   auto m = armed_pair_with_faulted_top();
   view::LeverStatus top;
   top.role = Role::top;
@@ -95,7 +95,7 @@ TEST_CASE("view: what only a status line says is marked as such", "[view]") {
   CHECK(text.find("TOP position*") != std::string::npos);
 }
 
-TEST_CASE("view: a sparkline spans its samples' range, blank where there was no value", "[view]") {
+TEST_CASE("a sparkline spans its samples' range, blank where there was no value", "[view]") {
   const std::vector<std::optional<float>> ramp{0.0f, 1.0f, std::nullopt, 7.0f};
   CHECK(view::sparkline(ramp, 4, false) == "_. #");
   CHECK(view::sparkline(ramp, 6, false) == "  _. #");  // the newest sample stays in the last column
@@ -104,13 +104,13 @@ TEST_CASE("view: a sparkline spans its samples' range, blank where there was no 
   CHECK(view::sparkline({2.0f, 2.0f}, 2, false) == "--");  // flat: the middle
 }
 
-TEST_CASE("view: lines are cut by characters, not bytes", "[view]") {
+TEST_CASE("lines are cut by characters, not bytes", "[view]") {
   CHECK(view::clip_columns("abc", 2) == "ab");
   CHECK(view::clip_columns("\u2581\u2582\u2583", 2) == "\u2581\u2582");
   CHECK(view::clip_columns("ab", 5) == "ab");
 }
 
-TEST_CASE("view: --json gives the screen's figures by name", "[view]") {
+TEST_CASE("the JSON gives the screen's figures by name", "[view]") {
   auto m = armed_pair_with_faulted_top();
   const auto j = view::to_json(m.snapshot(kT0 + 10'000), {"vcan0", true, 7});
   CHECK(j["interface"] == "vcan0");
