@@ -27,6 +27,7 @@
 #include "lever/program/parse.hpp"
 #include "lever/program/text.hpp"
 #include "live_monitor.hpp"
+#include "refresh_meter.hpp"
 #include "snapshot_json.hpp"
 #include "status_reader.hpp"
 
@@ -106,46 +107,59 @@ int run_json(view::LiveMonitor& live, const Options& options) {
 }
 
 int run_screen(view::LiveMonitor& live, const Options& options, bool utf8) {
+  using Clock = std::chrono::steady_clock;
   view::CursesScreen screen;
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-      std::chrono::duration<double>(1.0 / options.refresh_hz));
-  const auto start = std::chrono::steady_clock::now();
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options.refresh_hz));
+  const auto start = Clock::now();
   view::Snapshot snapshot;
   view::ReaderState reader;
+  view::RefreshMeter meter;
   bool frozen = false;
   bool take = true;
+  bool early = false;  // drawn at once for a key, between two scheduled pictures
+  auto next = start;
   while (!g_stop.load()) {
     if (take) {
       const std::lock_guard lock(live.mutex);
       snapshot = live.monitor.snapshot(view::realtime_us());
       reader = live.reader;
     }
-    const view::ScreenOptions screen_options{screen.columns(), utf8, frozen, static_cast<double>(options.bitrate)};
+    view::ScreenOptions screen_options{screen.columns(), utf8, frozen, static_cast<double>(options.bitrate),
+                                       std::nullopt};
+    screen_options.pictures_per_s = meter.per_second();
     screen.draw(view::render(snapshot, reader, screen_options));
-    const auto next = std::chrono::steady_clock::now() + period;
+    const auto drawn = Clock::now();
+    meter.on_draw(std::chrono::duration_cast<std::chrono::microseconds>(drawn - start).count());
+    // Pictures on a fixed schedule, so drawing time does not slow the rate; after a stall (a suspended
+    // terminal), the schedule starts again from now rather than catching up.
+    if (!early) next = next + period < drawn ? drawn + period : next + period;
+    early = false;
     take = !frozen;
     // Keys until the next picture is due.
-    for (auto now = std::chrono::steady_clock::now(); now < next && !g_stop.load();
-         now = std::chrono::steady_clock::now()) {
+    for (auto now = Clock::now(); now < next && !g_stop.load(); now = Clock::now()) {
       const int key =
           screen.key(static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(next - now).count() + 1));
       if (key == 'q' || key == 'Q') return 0;
       if (key == 'f' || key == 'F' || key == ' ') {
         frozen = !frozen;
         take = !frozen;
+        early = true;
         break;
       }
       if (key == 'r' || key == 'R') {
         const std::lock_guard lock(live.mutex);
         live.monitor.reset();
         take = true;
+        early = true;
         break;
       }
-      if (key == view::CursesScreen::kResize) break;
+      if (key == view::CursesScreen::kResize) {
+        early = true;
+        break;
+      }
     }
-    if (options.duration_s &&
-        std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(*options.duration_s))
-      break;
+    if (options.duration_s && Clock::now() - start >= std::chrono::duration<double>(*options.duration_s)) break;
   }
   return 0;
 }

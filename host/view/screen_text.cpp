@@ -185,10 +185,10 @@ std::vector<Line> render(const Snapshot& s, const ReaderState& reader, const Scr
   std::vector<Line> out;
   const BusView& bus = s.bus;
   out.push_back({fmt::format("lever-view  {}{}  bus load {:.1f} % of {:g} kbit/s  {:.0f} frames/s  frames {}  "
-                             "unknown {}  rejected {}  kernel drops {}{}",
+                             "unknown {}  rejected {}  kernel drops {}  screen {}/s{}",
                              reader.interface, reader.link_up ? "" : " (DOWN)", 100.0 * bus.load, options.bitrate / 1e3,
                              bus.frames_per_s, bus.frames, bus.unknown_ids, bus.rejected, reader.kernel_drops,
-                             options.frozen ? "  [FROZEN]" : ""),
+                             value_or_dash(options.pictures_per_s, "{:.1f}"), options.frozen ? "  [FROZEN]" : ""),
                  !reader.link_up || reader.kernel_drops > 0 ? Tone::bad : Tone::heading});
   if (s.pairs.empty()) out.push_back({"  no lever frames yet", Tone::warning});
   bool starred = false;

@@ -31,6 +31,7 @@ struct ScreenOptions {
   bool utf8 = true;  // the sparklines in block elements; otherwise in ASCII
   bool frozen = false;
   double bitrate = 1e6;
+  std::optional<double> pictures_per_s;  // how often the screen is drawn, as measured
 };
 
 std::vector<Line> render(const Snapshot& snapshot, const ReaderState& reader, const ScreenOptions& options);

@@ -4,6 +4,7 @@
 
 #include "lever/protocol/messages.hpp"
 #include "pair_monitor.hpp"
+#include "refresh_meter.hpp"
 #include "screen_text.hpp"
 #include "snapshot_json.hpp"
 #include "status_line.hpp"
@@ -17,7 +18,8 @@ constexpr std::int64_t kT0 = 1'700'000'000'000'000;
 
 std::string screen_of(const view::Snapshot& s, bool utf8 = true) {
   std::string text;
-  for (const auto& line : view::render(s, {"vcan0", true, 0}, {120, utf8, false, 1e6})) text += line.text + "\n";
+  for (const auto& line : view::render(s, {"vcan0", true, 0}, {120, utf8, false, 1e6, std::nullopt}))
+    text += line.text + "\n";
   return text;
 }
 
@@ -123,4 +125,19 @@ TEST_CASE("the JSON gives the screen's figures by name", "[view]") {
   CHECK(p["top_force_n"].is_null());
   CHECK(p["motion"]["frames"] == 1);
   CHECK(j["bus"]["frames"] == 3);
+}
+
+TEST_CASE("the screen's own refresh rate over its last ten intervals", "[view]") {
+  view::RefreshMeter meter;
+  CHECK(meter.per_second() == std::nullopt);
+  meter.on_draw(0);
+  CHECK(meter.per_second() == std::nullopt);
+  for (int i = 1; i <= 30; ++i) meter.on_draw(i * 100'000);
+  CHECK(*meter.per_second() == Approx(10.0));
+  for (int i = 1; i <= 5; ++i) meter.on_draw(3'000'000 + i * 200'000);  // then a slower screen
+  CHECK(*meter.per_second() == Approx(10.0 / 1.5));
+  auto m = armed_pair_with_faulted_top();
+  view::ScreenOptions options;
+  options.pictures_per_s = 9.96;
+  CHECK(view::render(m.snapshot(kT0), {"vcan0", true, 0}, options)[0].text.find("screen 10.0/s") != std::string::npos);
 }
