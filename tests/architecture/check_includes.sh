@@ -19,6 +19,7 @@ rules=(
   "host/codec_tool|codec common math protocol program"
   "host/bridge|codec common math protocol platform program"
   "host/ctl|codec common math protocol platform program"
+  "host/view|codec common math protocol platform program"
   "hil/devices|codec common math protocol fw platform hil/devices"
   "hil/include|codec common math protocol fw hil"
   "hil/src|codec common math protocol fw hil"
