@@ -18,6 +18,7 @@ rules=(
   "firmware/app|codec common math protocol fw platform program app"
   "host/codec_tool|codec common math protocol program"
   "host/bridge|codec common math protocol platform program"
+  "host/plot|codec common math protocol program"
   "hil/devices|codec common math protocol fw platform hil/devices"
   "hil/include|codec common math protocol fw hil"
   "hil/src|codec common math protocol fw hil"
