@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -19,6 +20,8 @@ namespace {
 
 namespace proto = lever::protocol;
 constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+// Longer is no session: its timeline (every 10 ms) would take gigabytes.
+constexpr double kMaxSpan = 86400.0;
 
 std::string message_name(const proto::FrameAddress& a) {
   const bool top = a.role == proto::Role::top;
@@ -117,6 +120,12 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
   s.frames_csv = kFramesHeader;
   if (log.frames.empty()) return s;
   s.t0 = log.frames.front().t;
+  for (const auto& lf : log.frames)
+    if (lf.t - s.t0 > kMaxSpan)
+      throw program::BadInput(
+          fmt::format("a frame at {:.6f} is {:.0f} s after the first: a recording of more than a "
+                      "day (or a clock that jumped); cut it to the session first",
+                      lf.t, lf.t - s.t0));
   Builder b(s);
   std::array<std::uint16_t, 2> faults{};
   std::array<bool, 2> heard{};
@@ -127,8 +136,8 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
   std::array<std::pair<std::uint32_t, std::uint32_t>, 2> data_count{};
 
   for (const auto& lf : log.frames) {
-    const double t = lf.t - s.t0;
-    if (t < 0) continue;  // a log's clock that steps back: the frame is counted, not drawn
+    // A log's clock that stepped back before the first frame's time: the frame is counted, drawn at the start.
+    const double t = std::max(lf.t - s.t0, 0.0);
     b.rows_until(t);
     proto::FrameAddress a;
     if (proto::classify(lf.frame.id, a) != proto::DecodeError::none || a.pair != pair) {
@@ -276,6 +285,9 @@ Session session_from_hil_trace(std::istream& in, const std::string& name) {
     if (i != v.size()) throw program::BadInput(fmt::format("{}:{}: {} columns, not {}", name, number, i, v.size()));
     if (number == 2) s.t0 = v[col["t"]];
     const double t = v[col["t"]] - s.t0;
+    if (t < 0 || t > kMaxSpan)
+      throw program::BadInput(
+          fmt::format("{}:{}: t {} is not within a day after the first row's", name, number, v[col["t"]]));
     const auto bin_index = static_cast<std::size_t>(t / kRateBin);
     while (s.rates.size() <= bin_index) {
       RateBin b;

@@ -67,6 +67,10 @@ run "$work/adir" --out "$work/x"; check "a directory: exit 2" test "$code" -eq 2
 check "a directory: says so" grep -q "a directory, not a candump -L log" "$work/err"
 : >"$work/empty.log"
 run "$work/empty.log" --out "$work/x"; check "an empty log: exit 2" test "$code" -eq 2
+{ head -5 "$log"; echo "(4102444800.000000) vcan0 700#0100000000000000"; } >"$work/jump.log"
+run "$work/jump.log" --out "$work/x" --no-plots
+check "a clock that jumps by decades: exit 2, at once (got $code)" test "$code" -eq 2
+check "a clock that jumps: says so" grep -q "more than a day" "$work/err"
 run "$log" --out "$work/x" --pair 16; check "--pair 16: exit 2" test "$code" -eq 2
 run "$log" --out "$work/x" --status "$log"; check "a log as status lines: exit 2" test "$code" -eq 2
 check "a log as status lines: names the file and line" grep -q "one-site.candump:1: not a lever-fw --stats-json line" "$work/err"
