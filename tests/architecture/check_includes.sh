@@ -20,6 +20,7 @@ rules=(
   "host/bridge|codec common math protocol platform program"
   "host/ctl|codec common math protocol platform program"
   "host/view|codec common math protocol platform program"
+  "host/plot|codec common math protocol program"
   "hil/devices|codec common math protocol fw platform hil/devices"
   "hil/include|codec common math protocol fw hil"
   "hil/src|codec common math protocol fw hil"

@@ -16,7 +16,8 @@ expect() {  # expect CODE NAME EXPECTED_MESSAGE ARGS...
   check "$name: exit code $want (got $code)" test "$code" -eq "$want"
   check "$name: says '$expected' (got: $(head -c 300 "$work/err"))" grep -qF -- "$expected" "$work/err"
   check "$name: no traceback" bash -c "! grep -q Traceback '$work/err'"
-  check "$name: at most 21 lines of messages (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -le 21
+  # 20 lines named, one count of the rest, one of the lines skipped
+  check "$name: at most 22 lines of messages (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -le 22
 }
 
 run --help; check "--help exits 0" test "$code" -eq 0
@@ -60,10 +61,21 @@ expect 2 "a log that is a directory" "a directory, not a candump -L log" "$dbc" 
 expect 2 "a log that is a device" "a device, not a candump -L log" "$dbc" /dev/zero
 expect 2 "a missing log" "cannot read: No such file" "$dbc" "$work/none.log"
 head -c 100000 /dev/urandom >"$work/random.log"
-expect 1 "a log of random bytes" "not a candump -L frame" "$dbc" "$work/random.log"
-check "a log of random bytes: the rest counted" grep -q "more lines did not decode" "$work/err"
-printf '(1.000000) vcan0 700#010\n' >"$work/odd.log"
-expect 1 "an odd number of hex digits" "$work/odd.log:1: not a candump -L frame" "$dbc" "$work/odd.log"
+# A file that is no candump -L log at all: one line says so, not one line per line of it.
+expect 2 "a log of random bytes" "random.log: not a candump -L log: none of its" "$dbc" "$work/random.log"
+check "a log of random bytes: one line (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -eq 1
+expect 2 "a DBC given as the log" "lever.dbc: not a candump -L log" "$dbc" "$dbc"
+check "a DBC given as the log: one line (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -eq 1
+# A log with some bad lines: each of the first 20 named, the rest counted, and how many were skipped.
+{ cat "$work/good.log"; head -c 100000 /dev/urandom; echo; cat "$work/good.log"; } >"$work/partly.log"
+expect 1 "a log with random bytes inside" "partly.log:2: not a candump -L frame" "$dbc" "$work/partly.log"
+check "a log with random bytes inside: the rest counted" grep -q "more lines did not decode" "$work/err"
+check "a log with random bytes inside: says how many were skipped" grep -qE "partly.log: [0-9]+ lines skipped, 2 frames decoded" "$work/err"
+check "a log with random bytes inside: both frames decoded" test "$(grep -c LeverHeartbeatHsi "$work/out")" -eq 2
+printf 'junk\n(1.000000) vcan0 700#010\n' >"$work/odd.log"
+expect 2 "an odd number of hex digits, and nothing else" "odd.log: not a candump -L log" "$dbc" "$work/odd.log"
+{ cat "$work/good.log"; printf '(1.000000) vcan0 700#010\n'; } >"$work/odd.log"
+expect 1 "an odd number of hex digits" "$work/odd.log:2: not a candump -L frame" "$dbc" "$work/odd.log"
 printf '(1.000000) vcan0 7FF#00\n(1.000000) vcan0 700#01\n' >"$work/unknown.log"
 expect 1 "an id the DBC lacks, a wrong length" "7FF: an id the DBC does not define" "$dbc" "$work/unknown.log"
 check "a wrong length too" grep -q "700: 1 bytes, not 8" "$work/err"

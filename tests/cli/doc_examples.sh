@@ -13,6 +13,7 @@ declare -A skip=(
   ["lever-bridge --can can0 --bind 0.0.0.0:5000 --peer 192.0.2.7:5000 --key site.key --site-id 1 --peer-site-id 2 --record site-a.log --stats-json"]="needs a CAN interface can0 and a peer at 192.0.2.7 (tests/kernel runs the bridge on a kernel CAN stack)"
   ["lever-bridge --config bridge.toml --check-config                # validate the file and the key; open nothing"]="needs the reader's bridge.toml (tests/cli/lever_bridge_cli.sh checks --check-config on its own files)"
   ["lever-bridge --config bridge.toml                               # the same options from a file"]="needs a bridge.toml naming a CAN interface (tests/kernel)"
+  ["lever-plot one-site.candump --status hsi.stats --status top.stats --out plots   # a session of pair 0"]="needs a recording (tests/cli/lever_plot_cli.sh runs it on lever_one_site's, tests/plot/)"
   ["lever-fw --config top.toml --stats-json"]="runs the board's hardware (the e2e tests in tests/kernel run this command on gpio-sim, with a top.toml from the example)"
 )
 
@@ -55,7 +56,7 @@ for doc in "$src/README.md" "$src"/docs/*.md; do
       done < <(grep -oE '"[a-z_]+":[-0-9.e+]+(\.\.\.)?' <<<"${line#\# }")
       continue
     fi
-    [[ $line =~ ^(build/bin/)?lever-(codec|hil|fw|fw-sim|bridge)\  ]] || continue
+    [[ $line =~ ^(build/bin/)?lever-(codec|hil|fw|fw-sim|bridge|plot)\  ]] || continue
     examples=$((examples + 1))
     if is_synopsis "${line%%#*}"; then skipped=$((skipped + 1)); continue; fi
     if [ -n "${skip[$line]+x}" ]; then

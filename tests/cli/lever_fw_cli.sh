@@ -28,6 +28,10 @@ check "--version names the program" grep -q "lever-fw" "$work/version"
 : >"$work/empty.toml"
 bad_config "unknown key" "codec.motion.q: unknown key" $'[codec.motion]\nq = 0.1'
 bad_config "unknown section" "sensor.x: unknown key" $'[sensor]\nx = 1'
+bad_config "a table given as an array" "encoder: must be a table ([encoder]), got an array" 'encoder = [1, 2]'
+bad_config "a nested table given as a number" "board.encoder: must be a table ([board.encoder]), got an integer" \
+  $'[board]\nencoder = 3'
+bad_config "a value given as a table" "lever.role: must be a string, got a table" $'[lever.role]\nx = 1'
 bad_config "wrong type" "lever.pair: must be a whole number in [0, 15], got a string" $'[lever]\npair = "one"'
 bad_config "out of range" "link.comms_timeout_ms: must be a whole number in [1, 60000], got 0" $'[link]\ncomms_timeout_ms = 0'
 bad_config "fraction where a whole number belongs" "got 2.5" $'[link]\nheartbeat_ms = 2.5'

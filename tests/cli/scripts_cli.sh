@@ -11,11 +11,19 @@ refuses() {  # refuses NAME ARGUMENT_NAMED COMMAND...
   local code=$?
   check "$name: exit 2 (got $code)" test "$code" -eq 2
   check "$name: names '$named' (got: $(head -c 200 "$work/err"))" grep -qF -- "$named" "$work/err"
+  # One line that points to --help, not the whole usage (a new user read past a screen of it to find the cause).
+  check "$name: one line on stderr (got $(wc -l <"$work/err"))" test "$(wc -l <"$work/err")" -eq 1
+  check "$name: points to --help" grep -qF -- "--help" "$work/err"
 }
-for script in check-skips build build-mcu rate-table hil-change-bounds-wall-tap hil-change-bounds-sphere-3dof demo test setup package \
-  cross-build cpu-budget; do
-  refuses "scripts/$script --frobnicate" "--frobnicate" "$root/scripts/$script" --frobnicate
+for script in "$root"/scripts/*; do
+  refuses "scripts/${script##*/} --frobnicate" "--frobnicate" "$script" --frobnicate
 done
+refuses "scripts/package without an architecture" "no architecture" "$root/scripts/package"
+refuses "scripts/cross-build without an architecture" "no architecture" "$root/scripts/cross-build"
+refuses "scripts/sysroot with two architectures" "got 2 arguments" "$root/scripts/sysroot" arm64 armhf
+refuses "scripts/man-pages without its directories" "BIN_DIR and OUT_DIR" "$root/scripts/man-pages"
+refuses "scripts/check-skips without a file" "JUNIT_XML" "$root/scripts/check-skips"
+refuses "scripts/gauge-sensitivity --seeds two" "'two'" "$root/scripts/gauge-sensitivity" --seeds two
 refuses "scripts/package with an unknown architecture" "'riscv64'" "$root/scripts/package" riscv64
 refuses "scripts/package with a fourth argument" "'extra'" "$root/scripts/package" amd64 b d extra
 refuses "scripts/cross-build with an unknown architecture" "'riscv64'" "$root/scripts/cross-build" riscv64

@@ -99,4 +99,16 @@ check "as many force frames as serve counted, or more (it counts only while both
 states=$("$dbc_decode" "$dbc" "$out/one-site.candump" | awk '$3 == "LeverHeartbeatTop" { print $4 }' | uniq | tr '\n' ' ')
 echo "TOP heartbeat states in the log: $states"
 check "the TOP's heartbeats went from disarmed through homing (4) to armed (2)" grep -q "State=1 .*State=4 .*State=2" <<<"$states"
+# lever-plot on the same recording: its frames per message are dbc-decode's, each lever's data frames its own count.
+"$bin/lever-plot" "$out/one-site.candump" --status "$out/hsi.stats" --status "$out/top.stats" --out "$work/plot" \
+  --no-plots >"$work/plot.out"; code=$?
+check "lever-plot draws the recording (exit $code)" test "$code" -eq 0
+for message in LeverMotion LeverForce LeverHeartbeatHsi LeverHeartbeatTop LeverCommand; do
+  check "lever-plot counts the $message frames dbc-decode does" \
+    grep -qE "^  $message +$(jq ".messages.$message.frames" "$work/decoded") " "$work/plot.out"
+done
+for role in HSI TOP; do
+  check "lever-plot: the $role's data_sent and refresh_sent at its last status line are the log's" \
+    grep -qE "^  $role at its last placed status line .*data_sent ([0-9]+), refresh_sent ([0-9]+); in the log by then: data \1, refresh \2$" "$work/plot.out"
+done
 finish "lever-fw one site"

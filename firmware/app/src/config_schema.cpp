@@ -51,6 +51,25 @@ void collect_keys(const toml::table& t, const std::string& prefix, std::vector<s
 
 }  // namespace
 
+// A key the schema does not know may still be a known name of the wrong type: a table's name given a value
+// (`encoder = [...]`), or a value's name given a table (`[lever.role]`). Said as the type it should be, since
+// "unknown key" sends the user looking for a misspelling that is not there.
+std::string ConfigSchema::unknown_key(const toml::table& t, const std::string& key, const std::string& source) const {
+  for (auto dot = key.find('.'); dot != std::string::npos; dot = key.find('.', dot + 1)) {
+    const std::string prefix = key.substr(0, dot);
+    if (const auto it = index_.find(prefix); it != index_.end()) {
+      const auto e = fields_[it->second].load(*t.at_path(prefix).node());
+      return fmt::format("{}: {}: {}", source, prefix, e.value_or("must not be a table"));
+    }
+  }
+  const std::string table = key + ".";
+  for (const auto& f : fields_)
+    if (f.key.starts_with(table))
+      return fmt::format("{}: {}: must be a table ([{}]), got {}", source, printable(key), printable(key),
+                         type_name(*t.at_path(key).node()));
+  return fmt::format("{}: {}: unknown key", source, printable(key));
+}
+
 void ConfigSchema::add(Field f) {
   index_.emplace(f.key, fields_.size());
   fields_.push_back(std::move(f));
@@ -139,7 +158,7 @@ std::optional<std::string> ConfigSchema::load_string(std::string_view text, cons
   std::vector<std::string> keys;
   collect_keys(t, "", keys);
   for (const auto& key : keys)
-    if (index_.find(key) == index_.end()) return fmt::format("{}: {}: unknown key", source_name, printable(key));
+    if (index_.find(key) == index_.end()) return unknown_key(t, key, source_name);
   for (const auto& f : fields_) {
     const auto node = t.at_path(f.key);
     if (!node) continue;

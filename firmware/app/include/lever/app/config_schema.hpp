@@ -91,6 +91,7 @@ class ConfigSchema {
     std::function<std::string()> print;
   };
   void add(Field f);
+  std::string unknown_key(const toml::table& t, const std::string& key, const std::string& source) const;
   static std::optional<std::string> read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
                                                  std::int64_t& out);
   static std::optional<std::string> read_text(const toml::node& n, std::string& out);
