@@ -166,6 +166,11 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
                  "position)")
       ->transform(program::one_of(kDeviceVelocities))
       ->default_str("driver");
+  cmd.add_option("--position-sensor", o.position_sensor,
+                 "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
+                 "kinematics, in doubles) or cartesian-grid (55 um cells, the model before issue 33)")
+      ->transform(program::one_of(kPositionSensors))
+      ->default_str("joint-encoders");
   cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
       ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
@@ -250,8 +255,9 @@ std::string misplaced_options(const RunOptions& o) {
   if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
     return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
            "no levers)";
-  if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
-    return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
+  if (!sphere && (o.device_velocity || o.driver_cutoff_hz || o.position_sensor))
+    return "--device-velocity, --driver-cutoff-hz and --position-sensor belong to sphere-3dof (the levers read "
+           "encoders)";
   return {};
 }
 

@@ -60,6 +60,7 @@ SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options)
   c.record_trace = run.record_trace;
   c.velocity_chain = options.device_velocity.value_or(c.velocity_chain);
   c.driver_cutoff_hz = options.driver_cutoff_hz.value_or(c.driver_cutoff_hz);
+  c.position_sensor = options.position_sensor.value_or(c.position_sensor);
   return c;
 }
 
@@ -90,11 +91,15 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"loss", c.network.loss},
         {"device_velocity", c.velocity_chain == SphereVelocityChain::driver ? "driver" : "difference"},
         {"driver_cutoff_hz", c.driver_cutoff_hz},
+        {"position_sensor",
+         c.position_sensor == SpherePositionSensor::joint_encoders ? "joint-encoders" : "cartesian-grid"},
         {"jnd", c.jnd},
         {"jnd_absolute_n", c.jnd_absolute_n},
         {"substeps", c.substeps},
         {"device",
          {{"resolution_m", c.device.resolution_m},
+          {"encoder_counts_per_rev", c.device.encoder_counts_per_rev},
+          {"link_m", c.device.link_m},
           {"max_force_n", c.device.max_force_n},
           {"mass_kg", c.device.mass_kg},
           {"friction_n", c.device.friction_n}}},

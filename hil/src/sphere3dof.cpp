@@ -23,7 +23,8 @@ void validate(const SphereConfig& c) {
   if (!(c.duration_s > 0.0 && c.duration_s <= 86400.0)) bad("duration must be in (0, 86400] s");
   if (!codec::is_valid(c.velocity_codec) || !codec::is_valid(c.force_codec)) bad("invalid codec configuration");
   if (!(c.device.resolution_m > 0.0) || !(c.device.max_force_n > 0.0) || !(c.device.mass_kg >= 0.0) ||
-      !(c.device.friction_n >= 0.0) || !(c.device.friction_linear_mps > 0.0))
+      !(c.device.friction_n >= 0.0) || !(c.device.friction_linear_mps > 0.0) ||
+      !(c.device.encoder_counts_per_rev >= 1.0) || !(c.device.link_m > 0.0))
     bad("invalid device parameters");
   if (!(c.hand.mass_kg + c.device.mass_kg > 0.0) || !(c.hand.stiffness > 0.0) || !(c.hand.damping >= 0.0) ||
       !(c.hand.tremor_rms_m >= 0.0) || !(c.hand.tremor_low_hz > 0.0) ||
