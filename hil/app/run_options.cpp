@@ -205,6 +205,12 @@ void add_homing_and_fault_options(CLI::App& cmd, RunOptions& o) {
 // The TOP's force amplifier.
 void add_gauge_options(CLI::App& cmd, RunOptions& o) {
   const StrainGaugeParams gauge;
+  cmd.add_option("--gauge-chain", o.config.gauge_chain,
+                 "what reads the levers' strain gauges: dad141 (the Modbus weighing amplifier, set by --gauge-*), "
+                 "paper-adc (an AD620 and a 16-bit ADC read at 1 kHz, the paper's PC), or topology (paper-adc in one "
+                 "controller, dad141 on one or two sites)")
+      ->transform(program::one_of(kGaugeChains))
+      ->default_str("topology");
   cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
                  "the force amplifier's IIR cut-off, Hz (Flintec DAD 141.1: 18, 8, 4, 3, 2, 1, 0.5, 0.25; 0: off)")
       ->check(number_in(0.1, 100.0, true))
@@ -295,6 +301,15 @@ SimConfig run_config(const RunOptions& o) {
   }
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);
+  if (reads_paper_gauge(c)) {
+    const StrainGaugeParams dad;
+    if (c.gauge.filter_hz != dad.filter_hz || c.gauge.averaging != dad.averaging || c.gauge.noise_n != dad.noise_n ||
+        c.gauge.step_n != dad.step_n)
+      throw std::invalid_argument(
+          "--gauge-filter-hz, --gauge-rate-hz, --gauge-noise-n and --gauge-step-n set the DAD 141.1: the paper's ADC "
+          "chain (--gauge-chain paper-adc, or one controller's default) has no such settings; add --gauge-chain "
+          "dad141");
+  }
   const auto& n = c.network;
   const char* no_network = c.topology == Topology::one_site         ? "one site has no network"
                            : c.topology == Topology::one_controller ? "one controller has no network"

@@ -71,6 +71,10 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
       {"seed", c.seed},
       {"velocity_packet_rate", r.velocity_packet_rate},
       {"force_packet_rate", r.force_packet_rate},
+      {"velocity_contact_rate", r.velocity_contact_rate},
+      {"velocity_free_rate", r.velocity_packet_rate - r.velocity_contact_rate},
+      {"force_contact_rate", r.force_contact_rate},
+      {"force_free_rate", r.force_packet_rate - r.force_contact_rate},
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
       {"saturated_share", r.saturated_share},
@@ -136,6 +140,9 @@ int run_sphere_command(const SphereConfig& config, bool json, const std::string&
              mode_name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
+  fmt::print(out, "    in contact / in free space: velocity {:.1f} % / {:.1f} %, force {:.1f} % / {:.1f} %\n",
+             100 * r.velocity_contact_rate, 100 * (r.velocity_packet_rate - r.velocity_contact_rate),
+             100 * r.force_contact_rate, 100 * (r.force_packet_rate - r.force_contact_rate));
   fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average (above the device's peak {:.1f} %)\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * r.saturated_share);
   fmt::print(

@@ -74,6 +74,8 @@ TEST_CASE("change detection: the wall-tap table's runs give exactly the pinned f
       c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev = row.at("encoder_counts").get<double>();
       c.encoder_interface =
           row.at("encoder_interface") == "counter" ? EncoderInterface::counter : EncoderInterface::gpio_events;
+      REQUIRE((row.at("gauge_chain") == "paper-adc" || row.at("gauge_chain") == "dad141"));
+      c.gauge_chain = row.at("gauge_chain") == "paper-adc" ? GaugeChain::paper_adc : GaugeChain::dad141;
       REQUIRE(row.at("pinned").size() == 3u);
       for (const auto& pin : row.at("pinned")) {
         c.seed = pin.at("seed").get<std::uint64_t>();
@@ -82,7 +84,9 @@ TEST_CASE("change detection: the wall-tap table's runs give exactly the pinned f
                            {"force", r.force_deadband_rate},
                            {"velocity_all", r.velocity_packet_rate},
                            {"force_all", r.force_packet_rate},
-                           {"jnd", r.force_jnd_violation}});
+                           {"jnd", r.force_jnd_violation},
+                           {"velocity_contact", r.velocity_deadband_contact_rate},
+                           {"force_contact", r.force_deadband_contact_rate}});
       }
     }
   }
@@ -110,7 +114,9 @@ TEST_CASE("change detection: the sphere-3dof table's runs give exactly the pinne
         check_pinned(pin, {{"velocity", r.velocity_packet_rate},
                            {"force", r.force_packet_rate},
                            {"jnd", r.force_jnd_violation},
-                           {"contact", r.contact_share}});
+                           {"contact", r.contact_share},
+                           {"velocity_contact", r.velocity_contact_rate},
+                           {"force_contact", r.force_contact_rate}});
       }
     }
   }

@@ -109,6 +109,8 @@ struct SphereResult {
   std::uint64_t velocity_packets = 0, force_packets = 0;
   double velocity_packet_rate = 0.0;  // packets per 1 kHz sample
   double force_packet_rate = 0.0;
+  // Of those, the packets sent on ticks the environment's force is not zero (in contact); the rest in free space.
+  double velocity_contact_rate = 0.0, force_contact_rate = 0.0;
   double contact_share = 0.0;  // share of ticks with a non-zero environment force
   double mean_contact_force_n = 0.0;
   double saturated_share = 0.0;  // share of ticks the environment asked for more than the device's peak
