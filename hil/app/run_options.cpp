@@ -261,9 +261,11 @@ std::string misplaced_options(const RunOptions& o) {
   if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
     return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
            "no levers)";
-  if (!sphere && (o.device_velocity || o.driver_cutoff_hz || o.position_sensor))
-    return "--device-velocity, --driver-cutoff-hz and --position-sensor belong to sphere-3dof (the levers read "
-           "encoders)";
+  if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
+    return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
+  if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
+  if (sphere && o.config.gauge_chain != GaugeChain::topology)
+    return "--gauge-chain belongs to the lever scenarios (sphere-3dof computes its force, it reads no gauge)";
   return {};
 }
 
