@@ -22,6 +22,10 @@ inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
     {"estimate", fw::MotionVelocity::estimate}};
 inline const program::Choices<SphereVelocityChain> kDeviceVelocities{{"driver", SphereVelocityChain::driver},
                                                                      {"difference", SphereVelocityChain::difference}};
+inline const program::Choices<SpherePositionSensor> kPositionSensors{
+    {"joint-encoders", SpherePositionSensor::joint_encoders}, {"cartesian-grid", SpherePositionSensor::cartesian_grid}};
+inline const program::Choices<GaugeChain> kGaugeChains{
+    {"topology", GaugeChain::topology}, {"dad141", GaugeChain::dad141}, {"paper-adc", GaugeChain::paper_adc}};
 inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
 inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events", EncoderInterface::gpio_events},
                                                                    {"counter", EncoderInterface::counter}};

@@ -110,10 +110,11 @@ nlohmann::json parameters_json(const SimConfig& config) {
           {"jnd_absolute_n", config.jnd_absolute_n},
           {"substeps", config.substeps},
           {"wall_stiffness", config.wall.stiffness},
-          {"gauge_noise_n", config.gauge.noise_n},
-          {"gauge_filter_hz", config.gauge.filter_hz},
-          {"gauge_rate_hz", config.gauge.output_rate_hz()},
-          {"gauge_step_n", config.gauge.step_n}};
+          {"gauge_chain", reads_paper_gauge(config) ? "paper-adc" : "dad141"},
+          {"gauge_noise_n", effective_gauge(config).noise_n},
+          {"gauge_filter_hz", effective_gauge(config).filter_hz},
+          {"gauge_rate_hz", effective_gauge(config).output_rate_hz()},
+          {"gauge_step_n", effective_gauge(config).step_n}};
 }
 
 // Each injected fault and each lever's reaction to it.
@@ -145,6 +146,10 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"force_deadband_rate", r.force_deadband_rate},
       {"force_refresh_rate", r.force_refresh_rate},
       {"force_rest_repeat_rate", r.force_rest_repeat_rate},
+      {"velocity_deadband_contact_rate", r.velocity_deadband_contact_rate},
+      {"velocity_deadband_free_rate", r.velocity_deadband_rate - r.velocity_deadband_contact_rate},
+      {"force_deadband_contact_rate", r.force_deadband_contact_rate},
+      {"force_deadband_free_rate", r.force_deadband_rate - r.force_deadband_contact_rate},
       {"position_rmse", r.position_rmse_rad},
       {"force_rmse", r.force_rmse_n},
       {"force_jnd_violation", r.force_jnd_violation},
@@ -199,6 +204,10 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
              "{:.1f} %; rest repeat {:.1f} % and {:.1f} %\n",
              100 * r.velocity_deadband_rate, 100 * r.force_deadband_rate, 100 * r.velocity_refresh_rate,
              100 * r.force_refresh_rate, 100 * r.velocity_rest_repeat_rate, 100 * r.force_rest_repeat_rate);
+  fmt::print(
+      out, "    the deadband's in contact / in free space: velocity {:.1f} % / {:.1f} %, force {:.1f} % / {:.1f} %\n",
+      100 * r.velocity_deadband_contact_rate, 100 * (r.velocity_deadband_rate - r.velocity_deadband_contact_rate),
+      100 * r.force_deadband_contact_rate, 100 * (r.force_deadband_rate - r.force_deadband_contact_rate));
   fmt::print(out,
              "  position rmse {:.2f} mrad, force rmse {:.3f} N, force off by more than a JND {:.1f} % of the time\n",
              1000 * r.position_rmse_rad, r.force_rmse_n, 100 * r.force_jnd_violation);

@@ -166,6 +166,11 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
                  "position)")
       ->transform(program::one_of(kDeviceVelocities))
       ->default_str("driver");
+  cmd.add_option("--position-sensor", o.position_sensor,
+                 "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
+                 "kinematics, in doubles) or cartesian-grid (55 um cells, the model before issue 33)")
+      ->transform(program::one_of(kPositionSensors))
+      ->default_str("joint-encoders");
   cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
       ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
@@ -200,6 +205,12 @@ void add_homing_and_fault_options(CLI::App& cmd, RunOptions& o) {
 // The TOP's force amplifier.
 void add_gauge_options(CLI::App& cmd, RunOptions& o) {
   const StrainGaugeParams gauge;
+  cmd.add_option("--gauge-chain", o.config.gauge_chain,
+                 "what reads the levers' strain gauges: dad141 (the Modbus weighing amplifier, set by --gauge-*), "
+                 "paper-adc (an AD620 and a 16-bit ADC read at 1 kHz, the paper's PC), or topology (paper-adc in one "
+                 "controller, dad141 on one or two sites)")
+      ->transform(program::one_of(kGaugeChains))
+      ->default_str("topology");
   cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
                  "the force amplifier's IIR cut-off, Hz (Flintec DAD 141.1: 18, 8, 4, 3, 2, 1, 0.5, 0.25; 0: off)")
       ->check(number_in(0.1, 100.0, true))
@@ -252,6 +263,9 @@ std::string misplaced_options(const RunOptions& o) {
            "no levers)";
   if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
     return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
+  if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
+  if (sphere && o.config.gauge_chain != GaugeChain::topology)
+    return "--gauge-chain belongs to the lever scenarios (sphere-3dof computes its force, it reads no gauge)";
   return {};
 }
 
@@ -289,6 +303,15 @@ SimConfig run_config(const RunOptions& o) {
   }
   c.homing = !o.no_homing;
   c.gauge.averaging = averaging_for(o.gauge_rate_hz);
+  if (reads_paper_gauge(c)) {
+    const StrainGaugeParams dad;
+    if (c.gauge.filter_hz != dad.filter_hz || c.gauge.averaging != dad.averaging || c.gauge.noise_n != dad.noise_n ||
+        c.gauge.step_n != dad.step_n)
+      throw std::invalid_argument(
+          "--gauge-filter-hz, --gauge-rate-hz, --gauge-noise-n and --gauge-step-n set the DAD 141.1: the paper's ADC "
+          "chain (--gauge-chain paper-adc, or one controller's default) has no such settings; add --gauge-chain "
+          "dad141");
+  }
   const auto& n = c.network;
   const char* no_network = c.topology == Topology::one_site         ? "one site has no network"
                            : c.topology == Topology::one_controller ? "one controller has no network"

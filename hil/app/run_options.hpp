@@ -26,6 +26,7 @@ struct RunOptions {
   std::optional<EncoderInterface> encoder_interface;
   std::optional<bool> hsi_force_loop;
   std::optional<SphereVelocityChain> device_velocity;
+  std::optional<SpherePositionSensor> position_sensor;
   std::optional<double> driver_cutoff_hz;
   double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);
   bool no_homing = false;

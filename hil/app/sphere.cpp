@@ -60,6 +60,7 @@ SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options)
   c.record_trace = run.record_trace;
   c.velocity_chain = options.device_velocity.value_or(c.velocity_chain);
   c.driver_cutoff_hz = options.driver_cutoff_hz.value_or(c.driver_cutoff_hz);
+  c.position_sensor = options.position_sensor.value_or(c.position_sensor);
   return c;
 }
 
@@ -70,6 +71,10 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
       {"seed", c.seed},
       {"velocity_packet_rate", r.velocity_packet_rate},
       {"force_packet_rate", r.force_packet_rate},
+      {"velocity_contact_rate", r.velocity_contact_rate},
+      {"velocity_free_rate", r.velocity_packet_rate - r.velocity_contact_rate},
+      {"force_contact_rate", r.force_contact_rate},
+      {"force_free_rate", r.force_packet_rate - r.force_contact_rate},
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
       {"saturated_share", r.saturated_share},
@@ -90,11 +95,15 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"loss", c.network.loss},
         {"device_velocity", c.velocity_chain == SphereVelocityChain::driver ? "driver" : "difference"},
         {"driver_cutoff_hz", c.driver_cutoff_hz},
+        {"position_sensor",
+         c.position_sensor == SpherePositionSensor::joint_encoders ? "joint-encoders" : "cartesian-grid"},
         {"jnd", c.jnd},
         {"jnd_absolute_n", c.jnd_absolute_n},
         {"substeps", c.substeps},
         {"device",
          {{"resolution_m", c.device.resolution_m},
+          {"encoder_counts_per_rev", c.device.encoder_counts_per_rev},
+          {"link_m", c.device.link_m},
           {"max_force_n", c.device.max_force_n},
           {"mass_kg", c.device.mass_kg},
           {"friction_n", c.device.friction_n}}},
@@ -131,6 +140,9 @@ int run_sphere_command(const SphereConfig& config, bool json, const std::string&
              mode_name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
+  fmt::print(out, "    in contact / in free space: velocity {:.1f} % / {:.1f} %, force {:.1f} % / {:.1f} %\n",
+             100 * r.velocity_contact_rate, 100 * (r.velocity_packet_rate - r.velocity_contact_rate),
+             100 * r.force_contact_rate, 100 * (r.force_packet_rate - r.force_contact_rate));
   fmt::print(out, "  in contact {:.0f} % of the time at {:.2f} N on average (above the device's peak {:.1f} %)\n",
              100 * r.contact_share, r.mean_contact_force_n, 100 * r.saturated_share);
   fmt::print(

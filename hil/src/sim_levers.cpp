@@ -10,7 +10,7 @@ namespace {
 // The firmware as the run configures it: the run's codecs, the gauge calibrated to the amplifier, and absolute
 // encoders when the levers do not home.
 fw::LeverConfig firmware_for(const SimConfig& config, fw::LeverConfig fw) {
-  calibrate_for(fw.gauge, config.gauge);
+  calibrate_for(fw.gauge, effective_gauge(config));
   if (!config.homing) fw.homing.method = fw::HomingMethod::absolute;
   return fw;
 }
@@ -29,6 +29,15 @@ fw::LeverConfig top_firmware(const SimConfig& config) {
 
 }  // namespace
 
+bool reads_paper_gauge(const SimConfig& config) {
+  return config.gauge_chain == GaugeChain::paper_adc ||
+         (config.gauge_chain == GaugeChain::topology && config.topology == Topology::one_controller);
+}
+
+StrainGaugeParams effective_gauge(const SimConfig& config) {
+  return reads_paper_gauge(config) ? paper_adc_gauge() : config.gauge;
+}
+
 PowerUpAngles power_up_angles(const SimConfig& config) {
   PowerUpAngles a;
   if (config.homing) {
@@ -40,12 +49,13 @@ PowerUpAngles power_up_angles(const SimConfig& config) {
 }
 
 SimLevers::SimLevers(const SimConfig& config, const PowerUpAngles& angles, Transport& transport, const Nanos& now) {
-  if (!config.gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
+  const StrainGaugeParams gauge = effective_gauge(config);
+  if (!gauge.valid()) throw std::invalid_argument("HIL: the strain gauge's parameters are out of range");
   const fw::LeverConfig hsi_fw = hsi_firmware(config);
   const Nanos tx_delay = config.topology == Topology::one_controller ? 0 : kFirmwareTxDelay;
-  hsi_ = std::make_unique<LeverSite<SimHsi>>(hsi_fw, angles.hsi, config.gauge, config.seed * 4 + 3, transport.hsi_bus(),
-                                             now, tx_delay);
-  top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, config.gauge, config.seed * 4 + 4,
+  hsi_ = std::make_unique<LeverSite<SimHsi>>(hsi_fw, angles.hsi, gauge, config.seed * 4 + 3, transport.hsi_bus(), now,
+                                             tx_delay);
+  top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, gauge, config.seed * 4 + 4,
                                              transport.top_bus(), now, tx_delay);
   if (config.encoder_interface == EncoderInterface::counter)
     for (SimHal* hal : {&hsi_->hal, &top_->hal}) hal->encoder_.set_queue_capacity(QuadratureEncoder::kMaxQueue);

@@ -50,6 +50,10 @@ void SimMetrics::add_armed(fw::Tick tick, const TickForces& forces, const World&
   hand_violations_ += std::fabs(hand_error) > std::max(jnd_ * std::fabs(forces.measured), jnd_absolute_n_);
   if (ht.sent_data) ++by_cause_[0][static_cast<std::size_t>(ht.sent_cause)];
   if (tt.sent_data) ++by_cause_[1][static_cast<std::size_t>(tt.sent_cause)];
+  if (forces.contact > 0.0) {
+    if (ht.sent_data && ht.sent_cause == fw::SendCause::deadband) ++deadband_in_contact_[0];
+    if (tt.sent_data && tt.sent_cause == fw::SendCause::deadband) ++deadband_in_contact_[1];
+  }
   min_observed_energy_j_[0] = std::min(min_observed_energy_j_[0], ht.observed_energy_j);
   min_observed_energy_j_[1] = std::min(min_observed_energy_j_[1], tt.observed_energy_j);
   metrics_.add_armed_tick(ht.sent_data, tt.sent_data, world.top().angle() - world.hsi().angle(), forces.displayed,
@@ -85,6 +89,8 @@ void SimMetrics::finish(SimResult& result, const SimLevers& levers) const {
   result.force_deadband_rate = rate(1, fw::SendCause::deadband);
   result.force_refresh_rate = rate(1, fw::SendCause::refresh);
   result.force_rest_repeat_rate = rate(1, fw::SendCause::rest_repeat);
+  result.velocity_deadband_contact_rate = static_cast<double>(deadband_in_contact_[0]) / ticks;
+  result.force_deadband_contact_rate = static_cast<double>(deadband_in_contact_[1]) / ticks;
   result.hsi_min_observed_energy_j = min_observed_energy_j_[0];
   result.top_min_observed_energy_j = min_observed_energy_j_[1];
   result.hsi_dissipated_energy_j = dissipated_[0].total_j;

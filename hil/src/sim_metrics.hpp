@@ -50,7 +50,8 @@ class SimMetrics {
   bool was_armed_[2] = {true, true};  // the scenario starts with both armed
   SimResult::LeverFaults lever_faults_[2];
   std::uint64_t refresh_frames_ = 0;
-  std::uint64_t by_cause_[2][3] = {};  // [HSI velocity, TOP force][fw::SendCause]
+  std::uint64_t by_cause_[2][3] = {};          // [HSI velocity, TOP force][fw::SendCause]
+  std::uint64_t deadband_in_contact_[2] = {};  // the deadband's, while the TOP touches the wall
   double jnd_, jnd_absolute_n_;
   double hand_sq_ = 0.0;
   std::uint64_t hand_violations_ = 0;

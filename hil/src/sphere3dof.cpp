@@ -23,7 +23,8 @@ void validate(const SphereConfig& c) {
   if (!(c.duration_s > 0.0 && c.duration_s <= 86400.0)) bad("duration must be in (0, 86400] s");
   if (!codec::is_valid(c.velocity_codec) || !codec::is_valid(c.force_codec)) bad("invalid codec configuration");
   if (!(c.device.resolution_m > 0.0) || !(c.device.max_force_n > 0.0) || !(c.device.mass_kg >= 0.0) ||
-      !(c.device.friction_n >= 0.0) || !(c.device.friction_linear_mps > 0.0))
+      !(c.device.friction_n >= 0.0) || !(c.device.friction_linear_mps > 0.0) ||
+      !(c.device.encoder_counts_per_rev >= 1.0) || !(c.device.link_m > 0.0))
     bad("invalid device parameters");
   if (!(c.hand.mass_kg + c.device.mass_kg > 0.0) || !(c.hand.stiffness > 0.0) || !(c.hand.damping >= 0.0) ||
       !(c.hand.tremor_rms_m >= 0.0) || !(c.hand.tremor_low_hz > 0.0) ||
@@ -102,6 +103,7 @@ SphereResult run_sphere(const SphereConfig& c) {
   SphereResult r;
   const auto ticks = static_cast<std::uint64_t>(std::llround(c.duration_s / kTick));
   if (c.record_trace && !c.trace_sink) r.trace.reserve(static_cast<std::size_t>(ticks));
+  std::uint64_t velocity_in_contact = 0, force_in_contact = 0;
   for (std::uint64_t k = 1; k <= ticks; ++k) {
     const double t = static_cast<double>(k) * kTick;
     const Nanos t_ns = static_cast<Nanos>(k) * kTickNs;
@@ -110,6 +112,10 @@ SphereResult run_sphere(const SphereConfig& c) {
     op.display(k, t_ns, down);
     top.step(k, t, t_ns, up, down);
     metrics.step(k, op, top, device.speed());
+    if (norm(top.force()) > 0.0) {
+      velocity_in_contact += op.velocity_sent() ? 1 : 0;
+      force_in_contact += top.force_sent() ? 1 : 0;
+    }
     if (c.record_trace) record(c, r, t, device, op, top, metrics);
   }
 
@@ -121,6 +127,8 @@ SphereResult run_sphere(const SphereConfig& c) {
   r.stale_packets = up.stale() + down.stale();
   r.velocity_packet_rate = static_cast<double>(r.velocity_packets) / static_cast<double>(ticks);
   r.force_packet_rate = static_cast<double>(r.force_packets) / static_cast<double>(ticks);
+  r.velocity_contact_rate = static_cast<double>(velocity_in_contact) / static_cast<double>(ticks);
+  r.force_contact_rate = static_cast<double>(force_in_contact) / static_cast<double>(ticks);
   metrics.finish(r, ticks);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   r.realtime_factor = r.wall_time_s > 0.0 ? c.duration_s / r.wall_time_s : 0.0;

@@ -14,12 +14,13 @@ SphereOp::SphereOp(const SphereConfig& c, const Vec3& start, const SphereDelays&
       down_ticks_(delays.down_ticks),
       velocity_sender_(c.velocity_codec, sphere_velocity_wire()),
       force_receiver_(c.force_codec.mode, sphere_force_wire(c.device)),
-      position_wire_(sphere_position_wire(c.device)),
-      measured_(quantize(start, c.device.resolution_m)),
+      position_wire_(sphere_position_wire(c)),
+      kinematics_(c.sphere.centre, c.device.link_m, c.device.encoder_counts_per_rev),
+      measured_(measure(start)),
       velocity_(c, measured_) {}
 
 void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
-  measured_ = quantize(position, c_.device.resolution_m);
+  measured_ = measure(position);
   const auto vd = velocity_sender_.offer(t, velocity_.update(measured_));
   velocity_sent_ = vd.send;
   if (vd.send) {
@@ -29,6 +30,11 @@ void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
     for (std::size_t i = 0; i < 3; ++i) packet.position[i] = position_wire_.encode(measured_[i], clipped);
     up.send(packet, t_ns);
   }
+}
+
+Vec3 SphereOp::measure(const Vec3& tip) const {
+  return c_.position_sensor == SpherePositionSensor::cartesian_grid ? quantize(tip, c_.device.resolution_m)
+                                                                    : kinematics_.measure(tip);
 }
 
 void SphereOp::display(std::uint64_t k, Nanos t_ns, Downlink& down) {

@@ -1,12 +1,14 @@
 #pragma once
-// The sphere-3dof's OP: the PC at the device. Every tick it reads the device (the position quantized to its
-// resolution, the velocity as the driver gives it: device_velocity.hpp), sends the velocity through its deadband,
-// and displays the force the TOP sent, reconstructed on the TOP's clock the link's delay late.
+// The sphere-3dof's OP: the PC at the device. Every tick it reads the device (the position through its joint
+// encoders and kinematics, omni_kinematics.hpp, the velocity as the driver gives it: device_velocity.hpp), sends the
+// velocity through its deadband, and displays the force the TOP sent, reconstructed on the TOP's clock the link's delay
+// late.
 #include <cstdint>
 
 #include "lever/codec/receiver.hpp"
 #include "lever/codec/sender.hpp"
 #include "lever/hil/device_velocity.hpp"
+#include "lever/hil/omni_kinematics.hpp"
 #include "sphere_packets.hpp"
 
 namespace lever::hil {
@@ -25,11 +27,14 @@ class SphereOp {
   std::uint64_t packets() const { return packets_; }
 
  private:
+  Vec3 measure(const Vec3& tip) const;
+
   const SphereConfig& c_;
   int down_ticks_;
   SphereSender velocity_sender_;
   SphereReceiver force_receiver_;
   SphereWire position_wire_;
+  OmniKinematics kinematics_;
   Vec3 measured_, displayed_{};
   DeviceVelocity velocity_;
   bool velocity_sent_ = false;

@@ -12,7 +12,7 @@ SphereTop::SphereTop(const SphereConfig& c, const SphereDelays& delays)
       up_ticks_(delays.up_ticks),
       velocity_receiver_(c.velocity_codec.mode, sphere_velocity_wire()),
       force_sender_(c.force_codec, sphere_force_wire(c.device)),
-      position_wire_(sphere_position_wire(c.device)) {}
+      position_wire_(sphere_position_wire(c)) {}
 
 void SphereTop::receive(std::uint64_t k, Nanos t_ns, Uplink& up) {
   clock_ = static_cast<double>(static_cast<std::int64_t>(k) - up_ticks_) * kTick;

@@ -30,6 +30,20 @@ expect_bad "gauge step zero" "--gauge-step-n" run --gauge-step-n 0
 "$hil" run --duration 0.5 --gauge-filter-hz 4 --gauge-rate-hz 150 --gauge-noise-n 0.03 --gauge-step-n 0.01 --json >"$work/g.json"
 check "the gauge options reach the model" jq -e '.parameters | .gauge_filter_hz == 4 and .gauge_rate_hz == 150 and
   .gauge_noise_n == 0.03 and .gauge_step_n == 0.01' "$work/g.json"
+expect_bad "gauge chain unknown" "--gauge-chain" run --gauge-chain bogus
+expect_bad "the DAD's settings on the paper's ADC chain" "--gauge-chain dad141" run --topology one-controller \
+  --gauge-noise-n 0.01
+expect_bad "a gauge chain for the sphere" "--gauge-chain belongs to the lever scenarios" run --scenario sphere-3dof \
+  --gauge-chain paper-adc
+expect_bad "the sphere's position sensor for a lever" "--position-sensor belongs to sphere-3dof" run \
+  --position-sensor cartesian-grid
+"$hil" run --duration 0.5 --topology one-controller --json >"$work/p.json"
+check "one controller reads the paper's ADC chain" jq -e '.parameters.gauge_chain == "paper-adc"' "$work/p.json"
+"$hil" run --duration 0.5 --topology one-controller --gauge-chain dad141 --gauge-filter-hz 4 --json >"$work/d.json"
+check "--gauge-chain dad141 in one controller takes the DAD's settings" \
+  jq -e '.parameters | .gauge_chain == "dad141" and .gauge_filter_hz == 4' "$work/d.json"
+"$hil" run --scenario sphere-3dof --duration 0.5 --position-sensor cartesian-grid --json >"$work/s.json"
+check "--position-sensor reaches the sphere" jq -e '.parameters.position_sensor == "cartesian-grid"' "$work/s.json"
 
 args=(run --scenario wall-tap --duration 2 --seed 7 --delay-ms 10 --jitter-ms 3 --loss 0.05 --fault link-down@1+0.2 --json)
 "$hil" "${args[@]}" >"$work/a.json"; check "run --json exits 0" test $? -eq 0

@@ -105,6 +105,34 @@ done < <(sed -n "/beside the paper's Fig. 12/,/(what is reproduced/p" "$work/out
   sed -nE 's/^  (velocity|force), (3-DoF|3-DoF[^,(]*[^ ,(])( \([0-9]+ Hz\))?, ([0-9.]+) % \[([^]]+)\] +([0-9.]+) %.*/\1|\2|\4|\5|\6/p')
 check "the Fig. 12 table has its 9 rows (found $rows)" test "$rows" -eq 9
 
+# The fidelity table's rows: every Fig. 8 and Fig. 12 row of docs/fidelity-table.md printed once, with the table's
+# verdict, and each figure with its split the summary's: "  ID  HERE %  CONTACT % / FREE %  PAPER  WITHIN / DIRECTION".
+table=$root/docs/fidelity-table.md
+section=$(sed -n "/figures in the fidelity table/,/read both ways/p" "$work/out")
+ids=$(sed -nE 's/^\| `((F8|F12|E12)-[^`]+)` .*/\1/p' "$table")
+printed_rows=0
+for id in $ids; do
+  line=$(grep -E "^  $id " <<<"$section" || true)
+  check "the demo prints the fidelity table's row $id" test -n "$line"
+  want=$(awk -F'|' -v id="\`$id\`" '{ gsub(/ /, "", $2) } $2 == id { gsub(/ /, "", $7); gsub(/ /, "", $8); print $7 "/" $8 }' "$table")
+  got=$(awk '{ print $(NF - 2) $(NF - 1) $NF }' <<<"$line")
+  check "the demo's verdict for $id ($got) is the table's ($want)" test "$got" = "$want"
+  [[ -n $line ]] && printed_rows=$((printed_rows + 1))
+done
+check "the fidelity table has its Fig. 8 and Fig. 12 rows (found $printed_rows)" test "$printed_rows" -ge 21
+read -r _ here _ contact _ _ free _ <<<"$(grep -E '^  F8-15-as-force ' <<<"$section")"
+for pair in "$here force_deadband_percent" "$contact force_deadband_contact_percent" "$free force_deadband_free_percent"; do
+  read -r printed col <<<"$pair"
+  check "F8-15-as-force: printed $printed is the summary's $col" \
+    test "$printed" = "$(one_decimal "$(cell "$sweep_dir/summary.csv" "$col" "variant=deadband;p_percent=10")")"
+done
+read -r _ here _ contact _ _ free _ <<<"$(grep -E '^  F12-force-5-lp ' <<<"$section")"
+for pair in "$here force_rate_percent" "$contact force_contact_percent" "$free force_free_percent"; do
+  read -r printed col <<<"$pair"
+  check "F12-force-5-lp: printed $printed is the summary's $col" test "$printed" = "$(one_decimal \
+    "$(cell "$sphere_dir/summary.csv" "$col" "direction=force;velocity_chain=driver 20 Hz;variant=3-DoF LP;p_percent=5")")"
+done
+
 # sweep.csv against lever-hil run at one point of each table, seed 1, the sweep's duration.
 duration=$(sed -nE 's/^sweep: [0-9]+ runs of ([0-9.]+) s .*/\1/p' "$work/out" | head -1)
 check "the demo's sweeps say their duration ($duration)" test -n "$duration"

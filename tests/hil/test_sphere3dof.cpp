@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "lever/hil/omni_kinematics.hpp"
 #include "lever/hil/sphere3dof.hpp"
 
 using namespace lever;
@@ -91,24 +92,37 @@ TEST_CASE("the difference chain is the backward difference of the quantized posi
     CHECK(moved_in_cell > 1000);  // a velocity from the true position would not be zero here
   }
   SECTION("exploring: each sample is (q_k - q_{k-1}) / 1 ms of the quantized positions, zero when they repeat") {
-    const auto r = run_sphere(traced(difference, 10.0));
-    const double resolution = OmniParams{}.resolution_m;
-    int repeats = 0;
-    for (std::size_t k = 1; k < r.trace.size(); ++k) {
-      const auto& row = r.trace[k];
-      const auto& before = r.trace[k - 1];
-      for (std::size_t i = 0; i < 3; ++i) {
-        // On the device's grid.
-        REQUIRE(std::fabs(row.measured[i] / resolution - std::round(row.measured[i] / resolution)) < 1e-6);
-        REQUIRE(std::fabs(row.measured[i] - row.position[i]) <= 0.5 * resolution + 1e-12);
-        REQUIRE(row.velocity[i] == (row.measured[i] - before.measured[i]) / 1e-3);
+    SphereConfig grid = difference;
+    grid.position_sensor = SpherePositionSensor::cartesian_grid;
+    for (const SphereConfig& c : {difference, grid}) {
+      const auto r = run_sphere(traced(c, 10.0));
+      const double resolution = OmniParams{}.resolution_m;
+      const OmniKinematics omni(c.sphere.centre, c.device.link_m, c.device.encoder_counts_per_rev);
+      int repeats = 0;
+      for (std::size_t k = 1; k < r.trace.size(); ++k) {
+        const auto& row = r.trace[k];
+        const auto& before = r.trace[k - 1];
+        const Vec3 expected =
+            c.position_sensor == SpherePositionSensor::cartesian_grid ? Vec3{} : omni.measure(row.position);
+        for (std::size_t i = 0; i < 3; ++i) {
+          if (c.position_sensor == SpherePositionSensor::cartesian_grid) {
+            // On the device's grid.
+            REQUIRE(std::fabs(row.measured[i] / resolution - std::round(row.measured[i] / resolution)) < 1e-6);
+            REQUIRE(std::fabs(row.measured[i] - row.position[i]) <= 0.5 * resolution + 1e-12);
+          } else {
+            // What the encoders' whole counts and the kinematics give, within a count at the tip of the truth.
+            REQUIRE(row.measured[i] == expected[i]);
+            REQUIRE(std::fabs(row.measured[i] - row.position[i]) <= 3.0 * resolution);
+          }
+          REQUIRE(row.velocity[i] == (row.measured[i] - before.measured[i]) / 1e-3);
+        }
+        if (same(row.measured, before.measured)) {
+          ++repeats;
+          REQUIRE(same(row.velocity, Vec3{}));
+        }
       }
-      if (same(row.measured, before.measured)) {
-        ++repeats;
-        REQUIRE(same(row.velocity, Vec3{}));
-      }
+      CHECK(repeats > 1000);
     }
-    CHECK(repeats > 1000);
   }
 }
 
@@ -149,12 +163,20 @@ TEST_CASE("at p = 0 over a lossless link every change is sent and the metric see
   };
   auto check = [&](SphereConfig c) {
     c = traced(c, 10.0);
-    c.velocity_chain = SphereVelocityChain::difference;  // whole cells a tick: the TOP's extrapolation is exact
+    c.velocity_chain = SphereVelocityChain::difference;
     const auto r = run_sphere(c);
     CHECK(r.force_jnd_violation == 0.0);
     CHECK(r.downlink_jnd_violation == 0.0);
-    CHECK(r.force_rmse_n < force_wire.resolution);  // the force's 16 bits, nothing more
-    CHECK(r.position_rmse_m < 1e-12);               // the extrapolation's rounding, nothing more
+    if (c.position_sensor == SpherePositionSensor::cartesian_grid) {
+      // Whole cells a tick go over the wire exactly: the TOP's extrapolation is exact.
+      CHECK(r.force_rmse_n < force_wire.resolution);  // the force's 16 bits, nothing more
+      CHECK(r.position_rmse_m < 1e-12);               // the extrapolation's rounding, nothing more
+    } else {
+      // The position's 16 bits, nothing more: at most half a step per axis, and the force that moves.
+      const double step = sphere_position_wire(c).resolution;
+      CHECK(r.position_rmse_m <= 0.5 * std::sqrt(3.0) * step);
+      CHECK(r.force_rmse_n <= c.sphere.stiffness * 0.5 * std::sqrt(3.0) * step + force_wire.resolution);
+    }
     // Sent exactly when the code differs from the sample before's (the first is always sent).
     std::uint64_t velocity_changes = 1, force_changes = 1;
     for (std::size_t k = 1; k < r.trace.size(); ++k) {
@@ -180,6 +202,11 @@ TEST_CASE("at p = 0 over a lossless link every change is sent and the metric see
   SECTION("a WAN-like 12 ms with 3 ms jitter") {
     SphereConfig c;
     c.network = {12.0, 3.0, 0.0, false};
+    check(c);
+  }
+  SECTION("the LAN, the position on a Cartesian grid") {
+    SphereConfig c;
+    c.position_sensor = SpherePositionSensor::cartesian_grid;
     check(c);
   }
 }

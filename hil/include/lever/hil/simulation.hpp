@@ -48,6 +48,16 @@ enum class EncoderInterface { gpio_events, counter };
 // over an IP link (the network parameters apply only there).
 enum class Topology { one_controller, one_site, two_sites };
 
+// Which chain reads the levers' strain gauges (docs/hil-model.md): the deployment's Modbus weighing amplifier (the
+// DAD 141.1, `gauge` below), the paper's instrumentation amplifier and 1 kHz ADC (paper_adc_gauge()), or the one
+// that goes with the topology: the paper's in one controller (the paper's setup), the DAD on one or two sites.
+enum class GaugeChain : std::uint8_t { topology, dad141, paper_adc };
+
+struct SimConfig;
+// The strain-gauge chain the run's levers read: the paper's ADC or the DAD 141.1 (config.gauge), by gauge_chain.
+bool reads_paper_gauge(const SimConfig& config);
+StrainGaugeParams effective_gauge(const SimConfig& config);
+
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
   double duration_s = 20.0;  // the paper's interval length
@@ -62,7 +72,8 @@ struct SimConfig {
   LeverPlantParams hsi_plant{};
   LeverPlantParams top_plant{};
   WallParams wall{};
-  StrainGaugeParams gauge{};
+  GaugeChain gauge_chain = GaugeChain::topology;
+  StrainGaugeParams gauge{};  // the DAD 141.1's settings, when it is the chain
   OperatorParams operator_params{};
   fw::LeverConfig hsi_firmware = default_firmware(protocol::Role::hsi);
   fw::LeverConfig top_firmware = default_firmware(protocol::Role::top);
@@ -109,6 +120,9 @@ struct SimResult {
   // (the paper's count), the refreshes and the rest repeats the rule would not have sent.
   double velocity_deadband_rate = 0.0, velocity_refresh_rate = 0.0, velocity_rest_repeat_rate = 0.0;
   double force_deadband_rate = 0.0, force_refresh_rate = 0.0, force_rest_repeat_rate = 0.0;
+  // Of the deadband's packets, those sent while the TOP touches the wall (its contact force above zero); the rest
+  // were sent in free space. Per armed tick, as the rates above, so contact + free space = the deadband's rate.
+  double velocity_deadband_contact_rate = 0.0, force_deadband_contact_rate = 0.0;
   double position_rmse_rad = 0.0;    // TOP angle against HSI angle
   double force_rmse_n = 0.0;         // displayed (HSI) against measured (TOP gauge)
   double force_jnd_violation = 0.0;  // share of armed ticks with |displayed - measured| > max(jnd |measured|, abs)

@@ -19,11 +19,13 @@ using Vec3 = Vec<double, 3>;
 
 // The SensAble PHANTOM Omni as its data sheet gives it.
 struct OmniParams {
-  double resolution_m = 55e-6;         // nominal position resolution (> 450 dpi)
-  double max_force_n = 3.3;            // maximum exertable force: the displayed vector's magnitude saturates here
-  double mass_kg = 0.045;              // apparent mass at the tip
-  double friction_n = 0.26;            // backdrive friction (the data sheet's bound)
-  double friction_linear_mps = 0.002;  // below this speed friction grows linearly: no chatter at the step
+  double resolution_m = 55e-6;              // nominal position resolution (> 450 dpi): the cartesian-grid sensor's cell
+  double encoder_counts_per_rev = 15000.0;  // each of the three base joints' encoders (the Omni's drivers)
+  double link_m = 0.13335;                  // upper arm and forearm (Jarillo-Silva et al. 2009)
+  double max_force_n = 3.3;                 // maximum exertable force: the displayed vector's magnitude saturates here
+  double mass_kg = 0.045;                   // apparent mass at the tip
+  double friction_n = 0.26;                 // backdrive friction (the data sheet's bound)
+  double friction_linear_mps = 0.002;       // below this speed friction grows linearly: no chatter at the step
 };
 
 // The operator's hand and arm on the stylus, and what the person does with them.
@@ -54,10 +56,15 @@ struct SphereParams {
 // backward difference and a third-order Butterworth low-pass), or the one-tick difference of the quantized position.
 enum class SphereVelocityChain : std::uint8_t { driver, difference };
 
+// How the OP reads the tip's position (docs/hil-model.md, "The position as the Omni measures it"): as the Omni does,
+// three joint encoders and the kinematics, in doubles; or, for comparison, quantized on a Cartesian grid of the data
+// sheet's resolution (the model before issue 33).
+enum class SpherePositionSensor : std::uint8_t { joint_encoders, cartesian_grid };
+
 struct SphereTraceRow {
   double t = 0.0;
   Vec3 position{};  // the device's tip (true)
-  Vec3 measured{};  // quantized to the device's resolution
+  Vec3 measured{};  // as the device measures it (position_sensor)
   Vec3 velocity{};  // the velocity the OP reads (its chain on measured), the value offered to the codec
   bool velocity_sent = false;
   bool top_has_position = false;
@@ -76,6 +83,7 @@ struct SphereConfig {
   // A switched 100 Mbit/s Ethernet LAN; it never reorders (reorder is ignored: the LAN is FIFO).
   NetworkParams network{0.2, 0.1, 0.0, false};
   OmniParams device{};
+  SpherePositionSensor position_sensor = SpherePositionSensor::joint_encoders;
   SphereVelocityChain velocity_chain = SphereVelocityChain::driver;
   double driver_cutoff_hz = 20.0;  // the driver's low-pass (the ROS driver's 20 Hz)
   HandParams hand{};
@@ -101,6 +109,8 @@ struct SphereResult {
   std::uint64_t velocity_packets = 0, force_packets = 0;
   double velocity_packet_rate = 0.0;  // packets per 1 kHz sample
   double force_packet_rate = 0.0;
+  // Of those, the packets sent on ticks the environment's force is not zero (in contact); the rest in free space.
+  double velocity_contact_rate = 0.0, force_contact_rate = 0.0;
   double contact_share = 0.0;  // share of ticks with a non-zero environment force
   double mean_contact_force_n = 0.0;
   double saturated_share = 0.0;  // share of ticks the environment asked for more than the device's peak
@@ -123,10 +133,13 @@ struct SphereResult {
 };
 
 // 16 bits per DoF on the link (the paper's section I; docs/hil-model.md, "16 bits per DoF on the wire"): each
-// component a 16-bit integer, rounded to nearest, clipped at its range. The position at the device's own grid
-// (it goes over exactly), the velocity at 0.1 mm/s (+-3.28 m/s), the force at the device's peak over 32767.
+// component a 16-bit integer, rounded to nearest, clipped at its range. The position at 5 um (+-164 mm, a tenth of an
+// encoder count at the tip; on the cartesian grid at the grid's own step, which goes over exactly), the velocity at
+// 0.1 mm/s (+-3.28 m/s), the force at the device's peak over 32767.
 using SphereWire = codec::FixedPointQuantizer<double, std::int16_t>;
-inline SphereWire sphere_position_wire(const OmniParams& device) { return {device.resolution_m}; }
+inline SphereWire sphere_position_wire(const SphereConfig& c) {
+  return {c.position_sensor == SpherePositionSensor::cartesian_grid ? c.device.resolution_m : 5e-6};
+}
 inline SphereWire sphere_velocity_wire() { return {1e-4}; }
 inline SphereWire sphere_force_wire(const OmniParams& device) { return {device.max_force_n / 32767.0}; }
 

@@ -36,6 +36,24 @@ struct StrainGaugeParams {
   }
 };
 
+// The paper's chain (docs/hil-model.md, "The paper's gauge chain"): the same 50 N, 2 mV/V cell excited at 10 V, an
+// AD620 instrumentation amplifier at gain 495 and a 16-bit ADC over +-10 V read once per 1 kHz control tick, with no
+// filter: the AD620's 9 nV/rtHz and the bridge's 2.4 nV/rtHz over the amplifier's 24 kHz, aliased into the samples.
+inline StrainGaugeParams paper_adc_gauge() {
+  constexpr double volt_per_newton = 2e-3 * 10.0 / 50.0;                  // the bridge's output: 0.4 mV/N
+  constexpr double gain = 1.0 + 49.4e3 / 100.0;                           // AD620 at R_G = 100 ohm
+  const double noise_density = std::sqrt(9e-9 * 9e-9 + 2.4e-9 * 2.4e-9);  // V/rtHz, referred to the input
+  const double noise_v = noise_density * std::sqrt(std::numbers::pi / 2.0 * 24e3);
+  StrainGaugeParams p;
+  p.adc_rate_hz = 1000.0;
+  p.filter_hz = 0.0;
+  p.averaging = 1;
+  p.noise_n = noise_v / volt_per_newton;
+  p.step_n = 20.0 / 65536.0 / gain / volt_per_newton;
+  p.range_n = 50.0;
+  return p;
+}
+
 // The firmware's calibration for this amplifier, as a board's lever-fw configuration is set for its own: codes to
 // newtons, the codes at which it reads saturated, and a staleness window of at least two output periods.
 inline void calibrate_for(fw::StrainGauge::Config& c, const StrainGaugeParams& p) {

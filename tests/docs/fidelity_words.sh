@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# docs/fidelity-table.md (written by the fidelity test) is the one statement of what the HIL reproduces of the paper.
+# README.md and docs/hil-model.md must quote it unchanged between their fidelity-table markers, and say nothing
+# beyond it: every sentence of theirs that says "reproduce..." names its rows by id (`F8-...`, `F12-...`, `E12-...`),
+# and a row named in a sentence that says it is reproduced must be marked so in the table (within 25 %, and for an
+# effect the paper's direction), one named in a sentence that says it is not must not be. Headings, link targets,
+# words in double quotes (the paper's, or a word named) and sentences that point at docs/fidelity-table.md itself
+# are not claims.
+# usage: fidelity_words.sh SOURCE_DIR [FILE...]   (FILE: the documents to check; default README.md docs/hil-model.md)
+set -euo pipefail
+root=$1
+shift
+(($#)) || set -- "$root/README.md" "$root/docs/hil-model.md"
+python3 - "$root/docs/fidelity-table.md" "$@" <<'PY'
+import re, sys
+table_path, docs = sys.argv[1], sys.argv[2:]
+body = "".join(l for l in open(table_path) if not l.startswith("<!--"))
+rows = {}
+for line in body.splitlines():
+    cells = [c.strip() for c in line.strip().strip("|").split("|")]
+    m = re.fullmatch(r"`([A-Za-z0-9.-]+)`", cells[0]) if cells else None
+    if m and len(cells) == 7:
+        within, direction = cells[5], cells[6]
+        rows[m.group(1)] = within != "no" and direction != "no" and (within, direction) != ("-", "-")
+if len(rows) < 10:
+    sys.exit(f"{table_path}: only {len(rows)} rows read")
+failures = []
+for doc in docs:
+    text = open(doc).read()
+    begin, end = "<!-- fidelity-table:begin -->\n", "<!-- fidelity-table:end -->"
+    if text.count(begin) != 1 or text.count(end) != 1:
+        failures.append(f"{doc}: no single fidelity-table block")
+        continue
+    a, b = text.index(begin) + len(begin), text.index(end)
+    if text[a:b] != body:
+        failures.append(f"{doc}: its fidelity table is not docs/fidelity-table.md's (scripts/fidelity-table)")
+    prose = text[: a - len(begin)] + text[b + len(end):]
+    prose = "\n".join(l for l in prose.splitlines() if not l.lstrip().startswith(("#", "|", "<!--")))
+    prose = re.sub(r"\]\([^)]*\)", "]", prose)   # link targets
+    prose = re.sub(r'"[^"\n]*"', '""', prose)     # quoted words
+    for sentence in re.split(r"(?<=[.;:!?])\s+|\n\s*\n|\n\s*[-*] ", prose):
+        if not re.search(r"reproduc", sentence, re.I):
+            continue
+        one_line = " ".join(sentence.split())
+        if "fidelity-table" in sentence:  # points at the table itself
+            continue
+        ids = re.findall(r"`((?:F8|F12|E12)-[A-Za-z0-9.-]+)`", sentence)
+        if not ids:
+            failures.append(f'{doc}: "{one_line[:140]}" says reproduced without naming a row of the table')
+            continue
+        negative = re.search(r"\bnot\b[^.]*reproduc|\bno\b[^.]*reproduc|never|cannot|n't", sentence, re.I)
+        for i in ids:
+            if i not in rows:
+                failures.append(f"{doc}: `{i}` is not a row of the table")
+            elif rows[i] == bool(negative):
+                verdict = "reproduced" if rows[i] else "not reproduced"
+                failures.append(f'{doc}: "{one_line[:140]}" contradicts the table, where `{i}` is {verdict}')
+for f in failures:
+    print(f, file=sys.stderr)
+if failures:
+    sys.exit(1)
+print(f"{', '.join(docs)}: the fidelity table quoted unchanged, every claim of a reproduced row as the table says")
+PY
