@@ -15,6 +15,7 @@ set -uo pipefail
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/gpio_sim_lib.sh"
 . "$(dirname "$0")/lever_sites_lib.sh"
+. "$(dirname "$0")/fault_timing_lib.sh"
 trap stop_all EXIT
 
 pin_tool ip || exit 1
@@ -25,114 +26,10 @@ require "both arm" wait_for_serve faults "both levers armed"
 pin_tool lever-fw "$bin/lever-fw" || exit 1  # for --motor-off, started as fast as a service manager would
 
 # The configuration's figures the bounds come from.
-key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
 comms_ms=$(key top link comms_timeout_ms)
 stale_ms=$(key top gauge stale_ms)
 tick_ms=1
 echo "bounds from top.toml: comms timeout $comms_ms ms, stale gauge $stale_ms ms"
-
-# clock_now: the guest's clock into $now, in microseconds: bash's own $EPOCHREALTIME, read without a fork or a
-# file (a fork costs milliseconds of guest time and a read of /proc/timer_list near one, all of it counted). In
-# virtual time (-rtc clock=vm) the guest's realtime clock runs with its monotonic one.
-clock_now() { now=${EPOCHREALTIME/./}; }
-# mono_offset: CLOCK_MONOTONIC less $EPOCHREALTIME, in microseconds (to put the controllers' stamps on the test's
-# clock), read once: /proc/timer_list's "now at" between two clock_now
-mono_offset() {
-  local line a b
-  clock_now
-  a=$now
-  while read -r line; do [[ $line == "now at "* ]] && break; done </proc/timer_list
-  clock_now
-  b=$now
-  line=${line#now at }
-  offset_us=$((${line%% *} / 1000 - (a + b) / 2))
-  echo "CLOCK_MONOTONIC - realtime: $offset_us us (+-$(((b - a) / 2)) us)"
-}
-# applied_since ROLE T0: the states the lever's controller was programmed with since T0 (clock_now), as
-# "+ms enabled period duty"
-applied_since() {
-  local n t e p d
-  while read -r n t e p d; do
-    ((t / 1000 - offset_us >= $2)) && echo "  +$(ms_since "$2" $((t / 1000 - offset_us))) ms: enabled $e period $p duty $d"
-  done <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/apply_log"
-}
-# off_stamp ROLE T0: $stamp, the time (clock_now's clock) of the first state since T0 the lever's controller was
-# programmed with that stops the motor (disabled); empty when there is none in its log
-off_stamp() {
-  local n t e p d
-  stamp=''
-  while read -r n t e p d; do
-    ((t / 1000 - offset_us >= $2)) && [[ $e == 0 ]] && { stamp=$((t / 1000 - offset_us)); return; }
-  done <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/apply_log"
-}
-ms_since() { awk -v d=$(($2 - $1)) 'BEGIN { printf "%.2f", d / 1e3 }'; }  # ms_since T0 T1: (T1 - T0) in ms
-# motor_off ROLE: its controller disabled or its driver's enable line (MOTOR_EN, line 2) low. lever-fw stops a
-# motor with both (PwmMotor's release); a held lever is enabled, even at a duty that rounds to 0.
-motor_off() {
-  local enabled period duty rest value=1
-  read -r enabled period duty rest <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" || return 1
-  local gpio=${1}_gpio
-  [[ -r ${!gpio}/sim_gpio2/value ]] && read -r value <"${!gpio}/sim_gpio2/value"
-  [[ $enabled == 0 || $value == 0 ]]
-}
-top_enable_low() { local value; read -r value <"$top_gpio/sim_gpio2/value" && [[ $value == 0 ]]; }
-# poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
-# serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
-poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }
-# time_to NAME MIN_MS MAX_MS T0 CONDITION...: waits (polling each 0.2 ms of guest time, up to 5 s) until the
-# condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`
-# the time is the controller's own stamp of the state that stopped the motor (apply_log); when the motor stopped
-# by its driver's enable line instead (no stamp), or for any other condition, it is the first poll that saw it.
-time_to() {
-  local name=$1 min=$2 max=$3 t0=$4
-  shift 4
-  local deadline=$((t0 + 5000000)) how=polled every=0.0002
-  [[ $1 == motor_off ]] && every=0.002  # stamped: the polls only wait
-  while ! "$@"; do
-    clock_now
-    ((now < deadline)) || { check "$name: not reached within 5 s (bound $max ms)" false; return; }
-    read -rt "$every" -u "$never_ready" || :
-  done
-  clock_now
-  if [[ $1 == motor_off ]]; then
-    off_stamp "$2" "$t0"
-    [[ -n $stamp ]] && now=$stamp how="the controller's stamp"
-  fi
-  local ms bound="<= $max"
-  ((min > 0)) && bound="$min..$max"
-  ms=$(ms_since "$t0" "$now")
-  check "$name: $ms ms, $how (bound $bound ms)" awk -v m="$ms" -v lo="$min" -v hi="$max" 'BEGIN { exit !(m >= lo && m <= hi) }'
-  fault_rows+=("| $name | $bound | $ms | $how |")
-}
-fault_rows=()
-# rearm WHY: both levers armed again, the operator still at work. Without its force feedback serve's operator,
-# who taps a wall the TOP no longer shows, swings the HSI past the wall, and past its allowed range, where it
-# refuses to arm; a re-arm while the HSI is inside the wall has the TOP push the wall at its torque limit until
-# that latches. So, as an operator would, the re-arm is pressed again until the pair stays armed: both armed in
-# status lines written 1.5 s after a press, and still 1.5 s later (at most 20 presses; a re-arm of an armed lever
-# does nothing).
-both_armed() { [[ $(last_stat hsi '.state == "armed"') == true && $(last_stat top '.state == "armed"') == true ]]; }
-rearm() {
-  local presses=0
-  while ((presses < 20)); do
-    command vcan0 3
-    presses=$((presses + 1))
-    sleep 1.5
-    both_armed || continue
-    sleep 1.5
-    both_armed && break
-  done
-  require "re-armed after: $1 ($presses presses)" both_armed
-}
-
-# rehome WHY: both levers disarmed (the HSI leaves its safe state, faults kept), homed and re-armed: what a lever
-# whose count can no longer be trusted needs
-rehome() {
-  command vcan0 2
-  command vcan0 6
-  require "the TOP homes again ($1)" wait_for 120 top '.position_valid'
-  rearm "$1, homed"
-}
 
 # 1. The TOP's process stopped: its loop finds the gap when it runs again. The rule (top.toml, [timing]): a step
 # interval longer than fault_after_ms latches TIMING at once; a shorter late interval spends one period of the

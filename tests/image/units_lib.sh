@@ -1,0 +1,94 @@
+# Sourced by the tests on the reference board image (tests/image/*.sh, run by tools/board-image/boot): the kernel
+# rig's pair harness (tests/kernel/lever_sites_lib.sh) with the levers as a user runs them. lever-fw is the
+# package's /usr/bin/lever-fw started by systemd (lever-fw@ROLE.service, user lever), its configuration the
+# installed example /etc/lever/ROLE.toml with only the device keys changed, its status lines read from the journal;
+# the devices are made by root and handed to the lever user by the package's udev rule alone.
+kernel_tests=$(cd "$(dirname "${BASH_SOURCE[0]}")/../kernel" && pwd)
+. "$kernel_tests/lib.sh" /usr/bin
+. "$kernel_tests/gpio_sim_lib.sh"
+. "$kernel_tests/lever_sites_lib.sh"
+bin=/usr/bin
+followers=()
+
+# board_devices: what the rig's guest has at boot, made here by root: vcan0, the gpio-sim and PWM controllers
+# (modules built for this kernel, in /lib/modules/RELEASE/extra)
+board_devices() {
+  modprobe -a irq_sim gpio-sim lever_pwm_sim && ip link add dev vcan0 type vcan && ip link set up vcan0 ||
+    { echo "FAILED: the board's simulated devices" >&2; return 1; }
+  # udev runs the rule on the new devices; wait until it has handled every event.
+  udevadm settle
+}
+
+# write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: the installed /etc/lever/ROLE.toml with this board's
+# devices (and the given keys) changed; $work/ROLE.toml is the same file, for serve and the bounds
+write_config() {
+  local role=$1 can=$2 file=$work/$1.toml; shift 2
+  cp "/etc/lever/$role.toml" "$work/$role.example"
+  cp "$work/$role.example" "$file"
+  set_key "$file" board.can interface "\"$can\"" &&
+    set_key "$file" board.encoder chip "\"$role\"" &&
+    set_key "$file" board.motor line_chip "\"$role\"" || exit 1
+  [[ $role == top ]] && { set_key "$file" board.motor pwm_chip "$(pwm_chip top)" || exit 1; }
+  while (($# >= 3)); do set_key "$file" "$1" "$2" "$3" || exit 1; shift 3; done
+  install -m 0644 "$file" "/etc/lever/$role.toml"
+  echo "/etc/lever/$role.toml differs from the example in:"
+  diff "$work/$role.example" "$file" | sed -n 's/^> /  /p'
+}
+
+# follow ROLE: the unit's journal from now on, its status lines (JSON) to $out/ROLE.stats, the rest to ROLE.err
+follow() {
+  journalctl -q -f -n 0 -o cat -u "lever-fw@$1" |
+    awk -v s="$out/$1.stats" -v e="$out/$1.err" '/^\{/ { print > s; fflush(s); next } { print > e; fflush(e) }' &
+  followers+=("$!")
+  # journalctl is listening once it has read the journal's end; a line written before that would be lost.
+  sleep 0.5
+}
+
+# start_fw ROLE: systemctl start lever-fw@ROLE (Type=notify: returns once lever-fw said READY=1); ROLE_pid its
+# main process
+start_fw() {
+  [[ -n ${granted:-} ]] || { udev_grants; granted=1; }
+  [[ " ${followed:-} " == *" $1 "* ]] || { follow "$1"; followed+=" $1"; }
+  if ! systemctl start "lever-fw@$1"; then
+    echo "FAILED: systemctl start lever-fw@$1" >&2
+    systemctl status --no-pager "lever-fw@$1" >&2
+    return 1
+  fi
+  printf -v "${1}_pid" '%s' "$(systemctl show -p MainPID --value "lever-fw@$1")"
+}
+
+# check_unit_user ROLE: the running lever-fw is the lever user's, with the group gpio, and it did not run as root
+check_unit_user() {
+  local pid=${1}_pid uid groups
+  uid=$(awk '$1 == "Uid:" { print $2 }' "/proc/${!pid}/status")
+  groups=$(id -nG lever)
+  check "lever-fw@$1 runs as user lever (uid $uid), groups: $groups" \
+    test "$uid" = "$(id -u lever)" -a "${groups/gpio/}" != "$groups"
+}
+
+# unit_result ROLE: "RESULT EXIT_STATUS" of the unit's last run
+unit_result() {
+  echo "$(systemctl show -p Result --value "lever-fw@$1") $(systemctl show -p ExecMainStatus --value "lever-fw@$1")"
+}
+
+# udev_grants: before any lever-fw runs, the package's udev rule gave group gpio the levers' gpio-sim chips (the
+# nodes, 0660) and their PWM chips' export files (writable)
+udev_grants() {
+  local role gpio node export
+  udevadm settle
+  for role in hsi top; do
+    gpio=${role}_gpio
+    node=/dev/$(basename "${!gpio}")
+    check "udev: $role's GPIO chip $node is group gpio's, 0660 ($(stat -c '%U:%G %a' "$node"))" \
+      test "$(stat -c '%G %a' "$node")" = "gpio 660"
+    export=/sys/class/pwm/pwmchip$(pwm_chip $role)/export
+    check "udev: $export is group gpio's, writable ($(stat -c '%U:%G %a' "$export"))" \
+      test "$(stat -c '%G' "$export")" = gpio -a "$(( $(stat -c '0%a' "$export") & 020 ))" -ne 0
+  done
+}
+
+stop_units() {
+  systemctl stop lever-fw@hsi lever-fw@top 2>/dev/null
+  kill "${followers[@]}" 2>/dev/null
+  stop_all
+}
