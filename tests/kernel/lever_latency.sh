@@ -65,7 +65,7 @@ for series in encoder_edge_to_top_pwm_ms gauge_reply_to_hsi_pwm_ms; do
     jq_true "$report" "($s.max | num) <= ${bound[$series]}"
 done
 e=.latency.encoder_edge_to_top_pwm_ms g=.latency.gauge_reply_to_hsi_pwm_ms
-check "the two directions' sum, $(r "($e.max // 0) + ($g.max // 0)") ms at most, within $periods_in_sum periods and both steps: $sum_bound ms" \
+check "the two directions' sum, $(r "(($e.max // 0) + ($g.max // 0)) * 1000 | round / 1000") ms at most, within $periods_in_sum periods and both steps: $sum_bound ms" \
   jq_true "$report" "($e.max | num) + ($g.max | num) <= $sum_bound"
 check "the world kept up with the levers (slips $(r .serve.slips), max lag $(r .serve.max_lag_ms) ms)" \
   jq_true "$report" '(.serve.slips | num) == 0'
