@@ -184,11 +184,14 @@ std::string sparkline(const std::vector<std::optional<float>>& samples, std::siz
 std::vector<Line> render(const Snapshot& s, const ReaderState& reader, const ScreenOptions& options) {
   std::vector<Line> out;
   const BusView& bus = s.bus;
-  out.push_back({fmt::format("lever-view  {}{}  bus load {:.1f} % of {:g} kbit/s  {:.0f} frames/s  frames {}  "
-                             "unknown {}  rejected {}  kernel drops {}  screen {}/s{}",
-                             reader.interface, reader.link_up ? "" : " (DOWN)", 100.0 * bus.load, options.bitrate / 1e3,
-                             bus.frames_per_s, bus.frames, bus.unknown_ids, bus.rejected, reader.kernel_drops,
-                             value_or_dash(options.pictures_per_s, "{:.1f}"), options.frozen ? "  [FROZEN]" : ""),
+  // What must not be cut off by a narrow terminal comes first: the state of the view itself.
+  const std::string rate = options.bitrate >= 1e6 ? fmt::format("{:g} Mbit/s", options.bitrate / 1e6)
+                                                  : fmt::format("{:g} kbit/s", options.bitrate / 1e3);
+  out.push_back({fmt::format("lever-view  {}{}{}  bus load {:.1f} % of {}  {:.0f} frames/s  frames {}  unknown {}  "
+                             "rejected {}  kernel drops {}  screen {}/s",
+                             reader.interface, reader.link_up ? "" : " (DOWN)", options.frozen ? "  [FROZEN]" : "",
+                             100.0 * bus.load, rate, bus.frames_per_s, bus.frames, bus.unknown_ids, bus.rejected,
+                             reader.kernel_drops, value_or_dash(options.pictures_per_s, "{:.1f}")),
                  !reader.link_up || reader.kernel_drops > 0 ? Tone::bad : Tone::heading});
   if (s.pairs.empty()) out.push_back({"  no lever frames yet", Tone::warning});
   bool starred = false;

@@ -79,6 +79,7 @@ TEST_CASE("the screen names each lever's state, homing and faults, and the data 
   CHECK(text.find("force_stale,can_bus") != std::string::npos);
   CHECK(text.find("+0.3835") != std::string::npos);
   CHECK(text.find("kernel drops 0") != std::string::npos);
+  CHECK(text.find("of 1 Mbit/s") != std::string::npos);
   // 40 ms later still armed; after 100 ms without a heartbeat, silent.
   CHECK(screen_of(m.snapshot(kT0 + 150'000)).find("silent 0.1s") != std::string::npos);
 }
@@ -140,4 +141,8 @@ TEST_CASE("the screen's own refresh rate over its last ten intervals", "[view]")
   view::ScreenOptions options;
   options.pictures_per_s = 9.96;
   CHECK(view::render(m.snapshot(kT0), {"vcan0", true, 0}, options)[0].text.find("screen 10.0/s") != std::string::npos);
+  // A frozen picture says so where a narrow terminal does not cut it off.
+  options.frozen = true;
+  CHECK(view::render(m.snapshot(kT0), {"vcan0", true, 0}, options)[0].text.rfind("lever-view  vcan0  [FROZEN]", 0) ==
+        0);
 }
