@@ -6,8 +6,8 @@
 set -uo pipefail
 check=$1
 source "$(dirname "$0")/../cli/lib.sh"
-for room in program common firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge host/view hil/devices \
-  hil/include hil/src hil/app hil/fw-sim; do
+for room in program common firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge host/ctl host/view host/plot \
+  hil/devices hil/include hil/src hil/app hil/fw-sim; do
   mkdir -p "$work/tree/$room"
 done
 printf '#include "lever/app/fw_config.hpp"\n#include "lever/platform/result.hpp"\n' >"$work/tree/firmware/app/main.cpp"
