@@ -24,7 +24,7 @@ Outcome outcome(Verb verb, const HeartbeatMessage& h) { return ctl::judge(verb, 
 
 }  // namespace
 
-TEST_CASE("a lever not heard is pending, never done or refused", "[ctl]") {
+TEST_CASE("lever-ctl: a lever not heard is pending, never done or refused", "[ctl]") {
   for (const Verb verb : {Verb::arm, Verb::disarm, Verb::rearm, Verb::home, Verb::tare, Verb::set_deadband}) {
     const auto j = ctl::judge(verb, std::nullopt);
     CHECK(j.outcome == Outcome::pending);
@@ -32,7 +32,7 @@ TEST_CASE("a lever not heard is pending, never done or refused", "[ctl]") {
   }
 }
 
-TEST_CASE("arm: done when armed; refused in fault, with a fault latched, or unhomed; else resend", "[ctl]") {
+TEST_CASE("lever-ctl arm: done when armed, refused in fault, with a fault latched or unhomed, else resent", "[ctl]") {
   CHECK(outcome(Verb::arm, heartbeat(LeverState::armed, true)) == Outcome::done);
   CHECK(outcome(Verb::arm, heartbeat(LeverState::disarmed, true)) == Outcome::pending);
   CHECK(outcome(Verb::arm, heartbeat(LeverState::homing, false)) == Outcome::pending);
@@ -50,7 +50,8 @@ TEST_CASE("arm: done when armed; refused in fault, with a fault latched, or unho
   CHECK_THAT(latched.why, Catch::Contains("faults timing, peer_state"));
 }
 
-TEST_CASE("rearm: done when armed; refused once the position is lost; a fault still holding is a resend", "[ctl]") {
+TEST_CASE("lever-ctl rearm: done when armed, refused once the position is lost, resent while a fault may still hold",
+          "[ctl]") {
   CHECK(outcome(Verb::rearm, heartbeat(LeverState::armed, true)) == Outcome::done);
   CHECK(outcome(Verb::rearm, heartbeat(LeverState::fault, true, protocol::bit(Fault::comms_timeout))) ==
         Outcome::pending);
@@ -59,7 +60,8 @@ TEST_CASE("rearm: done when armed; refused once the position is lost; a fault st
   CHECK(outcome(Verb::rearm, heartbeat(LeverState::homing, false)) == Outcome::pending);
 }
 
-TEST_CASE("home: done when the position is valid; refused in fault, saying whether homing itself gave up", "[ctl]") {
+TEST_CASE("lever-ctl home: done when the position is valid, refused in fault saying whether homing itself gave up",
+          "[ctl]") {
   CHECK(outcome(Verb::home, heartbeat(LeverState::disarmed, true)) == Outcome::done);
   CHECK(outcome(Verb::home, heartbeat(LeverState::armed, true)) == Outcome::done);
   CHECK(outcome(Verb::home, heartbeat(LeverState::homing, false)) == Outcome::pending);
@@ -72,13 +74,13 @@ TEST_CASE("home: done when the position is valid; refused in fault, saying wheth
   CHECK_THAT(faulted.why, Catch::Contains("disarm first"));
 }
 
-TEST_CASE("disarm: done when disarmed, whatever stays latched", "[ctl]") {
+TEST_CASE("lever-ctl disarm: done when disarmed, whatever stays latched", "[ctl]") {
   CHECK(outcome(Verb::disarm, heartbeat(LeverState::disarmed, false, protocol::bit(Fault::encoder))) == Outcome::done);
   CHECK(outcome(Verb::disarm, heartbeat(LeverState::armed, true)) == Outcome::pending);
   CHECK(outcome(Verb::disarm, heartbeat(LeverState::fault, true, 1)) == Outcome::pending);
 }
 
-TEST_CASE("tare goes to the TOP only, while disarmed; set-deadband to its direction's sender; neither confirmable",
+TEST_CASE("lever-ctl tare goes to a disarmed TOP only, set-deadband to its direction's sender, neither confirmable",
           "[ctl]") {
   CHECK_FALSE(ctl::confirmable(Verb::tare));
   CHECK_FALSE(ctl::confirmable(Verb::set_deadband));
@@ -94,7 +96,7 @@ TEST_CASE("tare goes to the TOP only, while disarmed; set-deadband to its direct
   CHECK(outcome(Verb::set_deadband, heartbeat(LeverState::armed, true)) == Outcome::done);
 }
 
-TEST_CASE("a resend goes only to the targets still pending", "[ctl]") {
+TEST_CASE("lever-ctl: a resend goes only to the targets still pending", "[ctl]") {
   const ctl::Judgement done{Outcome::done, {}}, pending{Outcome::pending, {}}, refused{Outcome::refused, {}};
   const auto both = ctl::still_pending({true, true}, done, pending);
   CHECK((!both.hsi && both.top));
@@ -104,7 +106,7 @@ TEST_CASE("a resend goes only to the targets still pending", "[ctl]") {
   CHECK((!top_only.hsi && top_only.top));
 }
 
-TEST_CASE("fault names: every known bit by its name, unknown bits in hex", "[ctl]") {
+TEST_CASE("lever-ctl fault names: every known bit by its name, unknown bits in hex", "[ctl]") {
   CHECK(ctl::fault_names(0) == "none");
   CHECK(ctl::fault_names(protocol::bit(Fault::comms_timeout) | protocol::bit(Fault::can_bus)) ==
         "comms_timeout, can_bus");
