@@ -223,12 +223,8 @@ command() {
   lever_ctl "$1" "${verbs[$2]}"
 }
 
-# jq_true FILE EXPR, stat_true ROLE EXPR: the jq expression is true on the file's JSON, on the lever's newest
-# status line. `num` in EXPR passes a number and stops jq on anything else: jq orders null (a figure that is
-# missing, or NaN as JSON writes it) below every number, so `.x < 0.025` alone holds when x is missing.
-jq_num='def num: if type == "number" and (isnan | not) and (isinfinite | not) then . else error("not a number: \(.)") end; '
-jq_true() { [[ $(jq -r "$jq_num$2" "$1" 2>/dev/null) == true ]]; }
-stat_true() { [[ $(last_line "$out/$1.stats" 2>/dev/null | jq -r "$jq_num$2" 2>/dev/null) == true ]]; }
+# stat_true ROLE FILTER: jq_true (lib.sh) on the lever's newest status line.
+stat_true() { last_line "$out/$1.stats" 2>/dev/null | jq_true - "$2"; }
 
 # check_one_site_report REPORT: the one-site scenario's bounds on serve's report (lever_one_site.sh, and the same
 # pair under systemd on the board image, tests/image/pair_units.sh)

@@ -14,7 +14,7 @@ check() {  # check NAME COMMAND...: run the command, count and print the result
 # `num` passes a figure on and fails on anything else, so that a missing figure (null: jq sorts it below every
 # number, and JSON carries a NaN as null) fails the comparison instead of passing it: write
 # `(.latency.x.max | num) <= 2.1`. A jq error (num's included) is a false.
-jq_prelude='def num: if type == "number" and (isnan | not) then . else error("not a figure: \(tojson)") end;'
+jq_prelude='def num: if type == "number" and (isnan | not) and (isinfinite | not) then . else error("not a figure: \(tojson)") end;'
 jq_true() { [[ $(jq -r "$jq_prelude $2" "$1" 2>/dev/null) == true ]]; }
 
 finish() {  # finish TITLE: the closing line, and the exit status
