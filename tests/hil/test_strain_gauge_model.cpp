@@ -211,3 +211,33 @@ TEST_CASE("the simulation refuses an amplifier it cannot model", "[hil][gauge]")
   c.gauge.step_n = std::nan("");
   CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
 }
+
+TEST_CASE("the paper's gauge chain: an AD620 and a 16-bit ADC read once a tick, as docs/hil-model.md derives it",
+          "[hil][gauge]") {
+  const StrainGaugeParams p = paper_adc_gauge();
+  // 16 bits over +-10 V behind a gain of 495 on a 0.4 mV/N bridge; 9.3 nV/rtHz over pi/2 x 24 kHz.
+  CHECK(p.step_n == Approx(20.0 / 65536.0 / 495.0 / 0.4e-3).epsilon(1e-12));
+  CHECK(p.step_n == Approx(1.54e-3).epsilon(0.01));
+  CHECK(p.noise_n == Approx(4.5e-3).epsilon(0.01));
+  CHECK(p.output_rate_hz() == 1000.0);
+  CHECK(p.filter_hz == 0.0);
+  // One reading a tick, stamped on it, in whole steps, as noisy as the white noise and the step's step^2/12 say.
+  const auto r = run(
+      p, [](fw::Tick) { return 3.0; }, 100'000);
+  CHECK(r.size() == Approx(100'000.0).margin(1.0));
+  for (std::size_t i = 1; i < r.size(); ++i) REQUIRE(r[i].tick - r[i - 1].tick == 1);
+  CHECK(rms(r) == Approx(std::sqrt(p.noise_n * p.noise_n + p.step_n * p.step_n / 12.0)).epsilon(0.03));
+  // One controller reads it; one and two sites read the DAD 141.1 unless told otherwise.
+  SimConfig c;
+  c.topology = Topology::one_controller;
+  CHECK(reads_paper_gauge(c));
+  CHECK(effective_gauge(c).step_n == p.step_n);
+  c.gauge_chain = GaugeChain::dad141;
+  CHECK_FALSE(reads_paper_gauge(c));
+  c.topology = Topology::two_sites;
+  c.gauge_chain = GaugeChain::topology;
+  CHECK_FALSE(reads_paper_gauge(c));
+  CHECK(effective_gauge(c).step_n == StrainGaugeParams{}.step_n);
+  c.gauge_chain = GaugeChain::paper_adc;
+  CHECK(reads_paper_gauge(c));
+}

@@ -81,9 +81,15 @@ class StrainGaugeModel {
   // since the last call, and publishes a reading each time `averaging` conversions are in.
   void update(double true_force, fw::Tick now) {
     const double now_s = static_cast<double>(now) * 1e-3;
-    if (next_sample_s_ + 1.0 < now_s) next_sample_s_ = now_s;  // first called late: no burst of old samples
+    if (next_sample_s_ + 1.0 < now_s) {  // first called late: no burst of old samples
+      clock_start_s_ = now_s;
+      conversions_ = 0;
+      next_sample_s_ = now_s;
+    }
     while (next_sample_s_ <= now_s + 1e-12) {
-      next_sample_s_ += period_s_;
+      // The n-th conversion at start + n periods, not a running sum, whose rounding drifts across tick boundaries
+      // (an ADC read once a tick missed 3 ticks in 100 000).
+      next_sample_s_ = clock_start_s_ + static_cast<double>(++conversions_) * period_s_;
       convert(true_force, now);
     }
   }
@@ -128,6 +134,8 @@ class StrainGaugeModel {
   double coupling_ = 0.0;  // (h / tau) exp(-h / tau): the first pole's share in the second over a period
   double period_s_;        // between conversions
   double next_sample_s_ = 0.0;
+  double clock_start_s_ = 0.0;
+  std::uint64_t conversions_ = 0;
   double stage1_ = 0.0, stage2_ = 0.0;
   bool started_ = false;
   double sum_ = 0.0;
