@@ -29,6 +29,7 @@ refuses "scripts/package with a fourth argument" "'extra'" "$root/scripts/packag
 refuses "scripts/cross-build with an unknown architecture" "'riscv64'" "$root/scripts/cross-build" riscv64
 refuses "scripts/cross-build with a third argument" "'extra'" "$root/scripts/cross-build" arm64 b extra
 refuses "scripts/build-mcu with a second argument" "'extra'" "$root/scripts/build-mcu" dir extra
+refuses "scripts/build --target without a name" "--target" "$root/scripts/build" "$work/never-built" --target
 refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
 refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
 refuses "scripts/cpu-budget --shifts 5" "'5'" "$root/scripts/cpu-budget" --shifts 5
