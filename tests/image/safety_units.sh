@@ -5,7 +5,8 @@
 #   1. the TOP's loop hung (SIGSTOP): systemd's WatchdogSec fires (SIGABRT, then SIGCONT), the motor off within
 #      WatchdogSec + 50 ms (the feeder looks every quarter of it, docs/deploy.md); Restart=on-failure brings the
 #      lever back disarmed and unhomed;
-#   2. the TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off stops the motor (100 ms, as lever_faults.sh);
+#   2. the TOP killed (SIGKILL): its enable line released, and ExecStopPost's lever-fw --motor-off disables the PWM,
+#      which the kernel keeps as the dead writer left it (100 ms, lever_faults.sh's bound for --motor-off);
 #   3. a third crash within StartLimitIntervalSec: the unit stays failed, the motor off;
 #   4. a configuration error (exit 2): not retried.
 # And systemd-analyze security of the running unit.
@@ -70,7 +71,10 @@ poll_rt on
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off, motor off" 0 100 "$t0" motor_off top
+# The driver's enable line falls as the kernel releases the dead process's lines (gpio-sim's pull-down, a board's
+# resistor); the PWM keeps its duty until ExecStopPost's lever-fw --motor-off disables it.
+time_to "TOP killed (SIGKILL): its enable line released, motor off" 0 100 "$t0" motor_off top
+time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables its PWM" 0 100 "$t0" pwm_disabled top
 poll_rt off
 applied_since top "$t0"
 require "Restart=on-failure: lever-fw@top runs again" wait_until $((restart_s + 30)) restarted top "$pid"
@@ -85,6 +89,7 @@ clock_now
 t0=$now
 kill -KILL "$top_pid"
 time_to "TOP killed a third time: motor off" 0 100 "$t0" motor_off top
+time_to "TOP killed a third time: ExecStopPost disables its PWM" 0 100 "$t0" pwm_disabled top
 poll_rt off
 sleep $((restart_s + 5))
 # systemd keeps the last failure's Result (signal) and says why it refused the fourth start in the journal.

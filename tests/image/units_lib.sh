@@ -60,7 +60,7 @@ start_fw() {
 # check_unit_user ROLE: the running lever-fw is the lever user's, with the group gpio, and it did not run as root
 check_unit_user() {
   local pid=${1}_pid uid groups
-  uid=$(awk '$1 == "Uid:" { print $2 }' "/proc/${!pid}/status")
+  uid=$(awk '$1 == "Uid:" { print $2 }' "/proc/${!pid:-0}/status" 2>/dev/null)
   groups=$(id -nG lever)
   check "lever-fw@$1 runs as user lever (uid $uid), groups: $groups" \
     test "$uid" = "$(id -u lever)" -a "${groups/gpio/}" != "$groups"

@@ -11,13 +11,15 @@ if [[ -f $share/watchdog-phase ]]; then
   . "$(cd "$(dirname "$0")/../kernel" && pwd)/lib.sh" /usr/bin
   read -r crashed_at timeout_s <"$share/watchdog-phase"
   booted_at=$(awk -v now="$EPOCHREALTIME" '{ printf "%.1f", now - $1 }' /proc/uptime)
-  # The RTC the kernel reads at boot has whole seconds: the reset is known to within 1 s.
-  reset_s=$(awk -v a="$crashed_at" -v b="$booted_at" 'BEGIN { printf "%.1f", b - a }')
-  check "the board booted again after the kernel stopped (console: $(grep -c 'Linux version' "$share/console.log") boots)" \
+  check "the board booted again after its kernel stopped ($(grep -c 'SeaBIOS' "$share/console.log") power-ons on its console)" \
     test "$(grep -c 'Kernel panic' "$share/console.log")" -ge 1 -a "$(grep -c 'SeaBIOS' "$share/console.log")" -ge 2
-  check "reset by the watchdog within RuntimeWatchdogSec $timeout_s s (+1 s of RTC resolution): ${reset_s} s from the stop to this boot" \
-    awk -v r="$reset_s" -v t="$timeout_s" 'BEGIN { exit !(r > 0 && r <= t + 1) }'
-  echo "| the board's kernel stopped (nothing feeds the watchdog) | $timeout_s s (+1 s) | $reset_s s to the next boot | the RTC |"
+  # The i6300esb keeps a flag across the reset it caused, which its driver reports as WDIOF_CARDRESET (0x20).
+  status=$(cat /sys/class/watchdog/watchdog0/bootstatus 2>/dev/null)
+  check "and the watchdog says it reset the board: bootstatus $status (WDIOF_CARDRESET 32)" \
+    test "$(( ${status:-0} & 32 ))" -eq 32
+  # Not a bound: the next boot's clock includes the firmware and a boot whose disk reads, in virtual time, cost
+  # guest time as the host's load makes them (tools/board-image/boot).
+  echo "from the stop to the next boot's kernel, by the RTC: $(awk -v a="$crashed_at" -v b="$booted_at" 'BEGIN { printf "%.1f", b - a }') s (RuntimeWatchdogSec $timeout_s s)"
   finish "the board's hardware watchdog under systemd"
   exit
 fi

@@ -47,26 +47,33 @@ motor_off() {
   [[ -r ${!gpio}/sim_gpio2/value ]] && read -r value <"${!gpio}/sim_gpio2/value"
   [[ $enabled == 0 || $value == 0 ]]
 }
+# pwm_disabled ROLE: its PWM controller disabled (what a process must write: the kernel keeps a dead writer's
+# state), whatever the enable line does
+pwm_disabled() {
+  local enabled rest
+  read -r enabled rest <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" && [[ $enabled == 0 ]]
+}
 top_enable_low() { local value; read -r value <"$top_gpio/sim_gpio2/value" && [[ $value == 0 ]]; }
 # poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
 # serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }
 # time_to NAME MIN_MS MAX_MS T0 CONDITION...: waits (polling each 0.2 ms of guest time, up to 5 s) until the
 # condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`
-# the time is the controller's own stamp of the state that stopped the motor (apply_log); when the motor stopped
-# by its driver's enable line instead (no stamp), or for any other condition, it is the first poll that saw it.
+# and `pwm_disabled ROLE` the time is the controller's own stamp of the state that stopped the motor (apply_log);
+# when the motor stopped by its driver's enable line instead (no stamp), or for any other condition, it is the
+# first poll that saw it.
 time_to() {
   local name=$1 min=$2 max=$3 t0=$4
   shift 4
   local deadline=$((t0 + 5000000)) how=polled every=0.0002
-  [[ $1 == motor_off ]] && every=0.002  # stamped: the polls only wait
+  [[ $1 == motor_off || $1 == pwm_disabled ]] && every=0.002  # stamped: the polls only wait
   while ! "$@"; do
     clock_now
     ((now < deadline)) || { check "$name: not reached within 5 s (bound $max ms)" false; return; }
     read -rt "$every" -u "$never_ready" || :
   done
   clock_now
-  if [[ $1 == motor_off ]]; then
+  if [[ $1 == motor_off || $1 == pwm_disabled ]]; then
     off_stamp "$2" "$t0"
     [[ -n $stamp ]] && now=$stamp how="the controller's stamp"
   fi

@@ -74,7 +74,7 @@ check "every frame candump logged decodes by the DBC (exit $code)" test "$code" 
 check "the log holds both heartbeats, motion and force frames and the commands" \
   test "$(jq '.messages | has("LeverHeartbeatHsi") and has("LeverHeartbeatTop") and has("LeverMotion") and has("LeverForce") and has("LeverCommand")' "$work/decoded")" = true
 check "as many force frames as serve counted, or more (it counts only while both are armed)" \
-  test "$(jq .messages.LeverForce.frames "$work/decoded")" -ge "$(r .frames.force)"
+  test "$(jq .messages.LeverForce.frames "$work/decoded")" -ge "$(jq .frames.force "$out/one-site.report")"
 states=$("$dbc_decode" "$dbc" "$out/one-site.candump" | awk '$3 == "LeverHeartbeatTop" { print $4 }' | uniq | tr '\n' ' ')
 echo "TOP heartbeat states in the log: $states"
 check "the TOP's heartbeats went from disarmed through homing (4) to armed (2)" grep -q "State=1 .*State=4 .*State=2" <<<"$states"
