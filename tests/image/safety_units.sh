@@ -5,8 +5,11 @@
 #   1. the TOP's loop hung (SIGSTOP): systemd's WatchdogSec fires (SIGABRT, then SIGCONT), the motor off within
 #      WatchdogSec + 50 ms (the feeder looks every quarter of it, docs/deploy.md); Restart=on-failure brings the
 #      lever back disarmed and unhomed;
-#   2. the TOP killed (SIGKILL): its enable line released, and ExecStopPost's lever-fw --motor-off disables the PWM,
-#      which the kernel keeps as the dead writer left it (100 ms, lever_faults.sh's bound for --motor-off);
+#   2. the TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables the PWM, which the kernel keeps as the
+#      dead writer left it, and the world holds the released enable line where it was (as most GPIO controllers
+#      do); bound: the unit's own budget for a lever whose loop no longer commands its motor, WatchdogSec + 50 ms,
+#      the same as for a hung loop (docs/deploy.md, "The reference board image", says why not lever_faults.sh's
+#      100 ms for a --motor-off started directly);
 #   3. a third crash within StartLimitIntervalSec: the unit stays failed, the motor off;
 #   4. a configuration error (exit 2): not retried.
 # And systemd-analyze security of the running unit.
@@ -54,7 +57,10 @@ poll_rt on
 clock_now
 t0=$now
 kill -STOP "$top_pid"
-time_to "TOP's loop hung (SIGSTOP): systemd's watchdog, motor off" 0 "$(awk -v w="$watchdog_ms" 'BEGIN { print w + 50 }')" \
+# The unit's budget for a lever whose loop no longer commands its motor: hung (the feeder looks every quarter of
+# WatchdogSec) or killed (systemd runs ExecStopPost at once).
+uncommanded_ms=$(awk -v w="$watchdog_ms" 'BEGIN { print w + 50 }')
+time_to "TOP's loop hung (SIGSTOP): systemd's watchdog, motor off" 0 "$uncommanded_ms" \
   "$t0" motor_off top
 poll_rt off
 applied_since top "$t0"
@@ -71,10 +77,11 @@ poll_rt on
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-# The driver's enable line falls as the kernel releases the dead process's lines (gpio-sim's pull-down, a board's
-# resistor); the PWM keeps its duty until ExecStopPost's lever-fw --motor-off disables it.
-time_to "TOP killed (SIGKILL): its enable line released, motor off" 0 100 "$t0" motor_off top
-time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables its PWM" 0 100 "$t0" pwm_disabled top
+# The kernel releases the dead process's lines, and the world holds the enable line where it was (as most GPIO
+# controllers keep a released output); the PWM keeps its duty: the motor runs until ExecStopPost's lever-fw
+# --motor-off disables it.
+time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off, motor off" 0 "$uncommanded_ms" "$t0" motor_off top
+time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
 poll_rt off
 applied_since top "$t0"
 require "Restart=on-failure: lever-fw@top runs again" wait_until $((restart_s + 30)) restarted top "$pid"
@@ -88,8 +95,8 @@ poll_rt on
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-time_to "TOP killed a third time: motor off" 0 100 "$t0" motor_off top
-time_to "TOP killed a third time: ExecStopPost disables its PWM" 0 100 "$t0" pwm_disabled top
+time_to "TOP killed a third time: motor off" 0 "$uncommanded_ms" "$t0" motor_off top
+time_to "TOP killed a third time: ExecStopPost disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
 poll_rt off
 sleep $((restart_s + 5))
 # systemd keeps the last failure's Result (signal) and says why it refused the fourth start in the journal.
