@@ -52,7 +52,9 @@ void print_human(std::FILE* out, const ServeOptions& o, const ServeSummary& s, c
 
 }  // namespace
 
-std::string state_name(const WatchedLever& l) { return l.heartbeat ? app::state_name(l.heartbeat->state) : "silent"; }
+std::string state_name(const WatchedLever& l) {
+  return l.heartbeat ? std::string(protocol::name(l.heartbeat->state)) : "silent";
+}
 
 void print_status_line(double t, const BusWatch& watch, const World& world, const ServeTick& s, double displayed,
                        const RunMetrics& metrics, std::int64_t max_lag_ms) {

@@ -1,38 +1,19 @@
 #include "sweep_runner.hpp"
 
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <atomic>
-#include <cerrno>
 #include <cstdio>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 #include "lever/program/exit_codes.hpp"
+#include "lever/program/gnuplot.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
 
 namespace lever::hil {
-
-int run_gnuplot(const std::filesystem::path& script) {
-  const std::string path = std::filesystem::absolute(script).string();  // never read as an option
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
-  char* const args[] = {const_cast<char*>("gnuplot"), const_cast<char*>(path.c_str()), nullptr};
-  pid_t pid = 0;
-  const int error = posix_spawnp(&pid, "gnuplot", &actions, nullptr, args, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) return 127;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return 127;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
 
 void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files) {
   namespace fs = std::filesystem;
@@ -74,7 +55,7 @@ void write_sweep(const std::filesystem::path& dir, const SweepTable& table, cons
 }
 
 int plot_sweep(const std::filesystem::path& dir) {
-  const int status = run_gnuplot(dir / "plots.gp");
+  const int status = program::run_gnuplot(dir / "plots.gp");
   if (status == 0) return 0;
   fmt::print(stderr, "lever-hil: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
              status == 127 ? "could not be started" : fmt::format("failed (exit status {})", status),

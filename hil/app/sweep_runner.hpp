@@ -17,9 +17,6 @@ namespace lever::hil {
 
 // Makes the output directory, refusing one that is a file and any of `files` in it that is not a regular file.
 void prepare_sweep_dir(const std::string& out_dir, std::initializer_list<const char*> files);
-// gnuplot on the script, started without a shell: its path is an argument, never a command line. Its output
-// goes to stderr (stdout is the program's report). Returns gnuplot's exit status, or 127 if it cannot start.
-int run_gnuplot(const std::filesystem::path& script);
 // Plot scripts name no path: these lines set `dir` to the script's own directory (gnuplot's ARG0, set however
 // it is started), so a directory's name is data, never gnuplot code, and the script runs from any directory.
 inline constexpr const char* kGnuplotScriptDir =

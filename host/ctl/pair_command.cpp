@@ -57,22 +57,6 @@ Targets still_pending(const Targets& t, const Judgement& hsi, const Judgement& t
 
 bool confirmable(Verb verb) noexcept { return verb != Verb::tare && verb != Verb::set_deadband; }
 
-std::string_view state_name(LeverState state) noexcept {
-  switch (state) {
-    case LeverState::init:
-      return "init";
-    case LeverState::disarmed:
-      return "disarmed";
-    case LeverState::armed:
-      return "armed";
-    case LeverState::fault:
-      return "fault";
-    case LeverState::homing:
-      return "homing";
-  }
-  return "?";
-}
-
 std::string fault_names(protocol::FaultBits faults) {
   std::string names;
   for (const Fault f : protocol::kAllFaults)
@@ -88,7 +72,7 @@ std::string fault_names(protocol::FaultBits faults) {
 }
 
 std::string describe(const HeartbeatMessage& h) {
-  return fmt::format("{}, position {}, faults {}", state_name(h.state), h.position_valid ? "valid" : "not valid",
+  return fmt::format("{}, position {}, faults {}", protocol::name(h.state), h.position_valid ? "valid" : "not valid",
                      fault_names(h.faults));
 }
 

@@ -43,7 +43,6 @@ Targets still_pending(const Targets& targets, const Judgement& hsi, const Judgem
 
 // "comms_timeout, peer_state" (or "none").
 std::string fault_names(protocol::FaultBits faults);
-std::string_view state_name(protocol::LeverState state) noexcept;
 // "fault, position valid, faults comms_timeout": what the heartbeat says, for a message.
 std::string describe(const protocol::HeartbeatMessage& heartbeat);
 

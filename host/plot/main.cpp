@@ -11,6 +11,7 @@
 #include "candump_log.hpp"
 #include "lever/program/config_file.hpp"
 #include "lever/program/exit_codes.hpp"
+#include "lever/program/gnuplot.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/parse.hpp"
 #include "lever/program/text.hpp"
@@ -132,7 +133,7 @@ int run(const std::string& input, const std::string& out_dir, const std::vector<
                s.duration > 0 ? static_cast<double>(force) / s.duration : 0.0);
   }
   if (!draw) return program::kSuccess;
-  const int status_code = plot::run_gnuplot((dir / "plots.gp").string());
+  const int status_code = program::run_gnuplot(dir / "plots.gp");
   if (status_code != 0) {
     fmt::print(stderr, "lever-plot: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
                status_code == 127 ? "could not be started" : fmt::format("failed (exit status {})", status_code),

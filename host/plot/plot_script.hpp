@@ -8,6 +8,5 @@
 namespace lever::plot {
 
 std::string gnuplot_script(const Session& s, const std::string& title);
-int run_gnuplot(const std::string& script);  // gnuplot's exit status, 127 if it cannot start
 
 }  // namespace lever::plot

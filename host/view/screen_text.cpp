@@ -35,7 +35,7 @@ const char* opcode_name(protocol::Opcode op) noexcept {
 std::string lever_state(const LeverView& lever) {
   if (!lever.heard) return "unheard";
   if (lever.silent()) return fmt::format("silent {:.1f}s", *lever.heartbeat_age_s);
-  return state_name(lever.heartbeat.state);
+  return std::string(protocol::name(lever.heartbeat.state));
 }
 
 Tone lever_tone(const LeverView& lever) {
@@ -106,22 +106,6 @@ void history_row(std::vector<Line>& out, const char* name, const char* unit,
 }
 
 }  // namespace
-
-const char* state_name(protocol::LeverState state) noexcept {
-  switch (state) {
-    case protocol::LeverState::init:
-      return "init";
-    case protocol::LeverState::disarmed:
-      return "disarmed";
-    case protocol::LeverState::armed:
-      return "armed";
-    case protocol::LeverState::fault:
-      return "fault";
-    case protocol::LeverState::homing:
-      return "homing";
-  }
-  return "unknown";
-}
 
 std::string fault_names(protocol::FaultBits bits) {
   std::string out;

@@ -22,7 +22,7 @@ json lever(const LeverView& l) {
   json out{{"heard", l.heard},
            {"heartbeat_age_s", or_null(l.heartbeat_age_s)},
            {"silent", l.silent()},
-           {"state", l.heard ? json(state_name(l.heartbeat.state)) : json()},
+           {"state", l.heard ? json(std::string(protocol::name(l.heartbeat.state))) : json()},
            {"homed", l.heard ? json(l.heartbeat.position_valid) : json()},
            {"faults", faults},
            {"heartbeats", l.heartbeats},

@@ -2,22 +2,6 @@
 
 namespace lever::app {
 
-std::string state_name(protocol::LeverState s) {
-  switch (s) {
-    case protocol::LeverState::init:
-      return "init";
-    case protocol::LeverState::disarmed:
-      return "disarmed";
-    case protocol::LeverState::armed:
-      return "armed";
-    case protocol::LeverState::fault:
-      return "fault";
-    case protocol::LeverState::homing:
-      return "homing";
-  }
-  return "unknown";
-}
-
 nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
   auto optional = [](const auto& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
   auto if_set = [](bool set, const auto& v) { return set ? nlohmann::json(v) : nlohmann::json(); };
@@ -27,7 +11,7 @@ nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
   return {
       {"role", s.role == protocol::Role::hsi ? "hsi" : "top"},
       {"pair", s.pair},
-      {"state", state_name(s.state)},
+      {"state", std::string(protocol::name(s.state))},
       {"faults", faults},
       {"position_rad", s.position_rad},
       {"position_valid", s.position_valid},

@@ -7,6 +7,7 @@
 // arbitration, so commands outrank data and data outranks heartbeats.
 #include <cstdint>
 #include <numbers>
+#include <string_view>
 
 #include "lever/codec/config.hpp"
 #include "lever/protocol/bit_field.hpp"
@@ -125,6 +126,23 @@ struct EnergyMessage {
 
 // Stable numbers: on the wire in heartbeats.
 enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault = 3, homing = 4 };
+
+// The one spelling of a state, in status lines, on screens and in messages.
+constexpr std::string_view name(LeverState state) noexcept {
+  switch (state) {
+    case LeverState::init:
+      return "init";
+    case LeverState::disarmed:
+      return "disarmed";
+    case LeverState::armed:
+      return "armed";
+    case LeverState::fault:
+      return "fault";
+    case LeverState::homing:
+      return "homing";
+  }
+  return "unknown";
+}
 
 struct HeartbeatMessage {
   LeverState state = LeverState::init;

@@ -83,7 +83,6 @@ Snapshot snapshot(const Lever& lever, fw::Tick now) noexcept {
   return s;
 }
 
-std::string state_name(protocol::LeverState s);
 nlohmann::json stats_json(const Snapshot& s, const BoardStats& board);
 
 }  // namespace lever::app
