@@ -239,8 +239,9 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
   for (auto& line : s.status) {
     const auto& at = sent_at[line.top ? 1 : 0];
     if (line.tx_frames == 0 || line.tx_frames > at.size()) continue;
-    line.t = at[line.tx_frames - 1];
-    std::tie(line.data_in_log, line.refresh_in_log) = data_by[line.top ? 1 : 0][line.tx_frames - 1];
+    const auto sent = static_cast<std::size_t>(line.tx_frames - 1);  // below at.size(): checked above
+    line.t = at[sent];
+    std::tie(line.data_in_log, line.refresh_in_log) = data_by[line.top ? 1 : 0][sent];
     if (!line.top) continue;
     const auto row = static_cast<std::size_t>(std::ceil(line.t / kTimelineStep));
     if (row >= s.timeline.size()) continue;
