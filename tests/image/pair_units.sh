@@ -18,10 +18,10 @@ check_unit_user top
 require "both levers come up disarmed and not homed" wait_for 60 hsi '.state == "disarmed" and (.position_valid | not)'
 require "(TOP too)" wait_for 60 top '.state == "disarmed" and (.position_valid | not)'
 command vcan0 6
-require "cansend home: the HSI homes against its end stop" wait_for 120 hsi '.position_valid'
-require "cansend home: the TOP homes against its end stop" wait_for 120 top '.position_valid'
+require "lever-ctl home: the HSI homes against its end stop" wait_for 120 hsi '.position_valid'
+require "lever-ctl home: the TOP homes against its end stop" wait_for 120 top '.position_valid'
 command vcan0 1
-require "cansend arm: both arm (serve saw both armed heartbeats)" wait_for_serve one-site "both levers armed"
+require "lever-ctl arm: both arm (serve saw both armed heartbeats)" wait_for_serve one-site "both levers armed"
 wait "$serve_pid"; code=$?
 check "lever-hil serve ran its 15 s scenario and exited 0 (got $code)" test "$code" -eq 0
 check_one_site_report "$out/one-site.report"
