@@ -87,20 +87,27 @@ void direction_row(std::vector<Line>& out, const char* name, const DirectionView
                  tone});
 }
 
+struct SampleRange {
+  float lo, hi;
+};
+// The smallest and largest of the samples from `from` on; none when every one of them is missing.
+std::optional<SampleRange> sample_range(const std::vector<std::optional<float>>& samples, std::size_t from) {
+  std::optional<SampleRange> range;
+  for (std::size_t i = from; i < samples.size(); ++i) {
+    if (!samples[i]) continue;
+    const float v = *samples[i];
+    range = range ? SampleRange{std::min(range->lo, v), std::max(range->hi, v)} : SampleRange{v, v};
+  }
+  return range;
+}
+
 void history_row(std::vector<Line>& out, const char* name, const char* unit,
                  const std::vector<std::optional<float>>& samples, const ScreenOptions& options) {
   constexpr std::size_t kLabel = 18, kRange = 26;
   const std::size_t width = options.width > kLabel + kRange + 10 ? options.width - kLabel - kRange : 10;
   const std::size_t from = samples.size() > width ? samples.size() - width : 0;
-  float lo = 0, hi = 0;
-  bool any = false;
-  for (std::size_t i = from; i < samples.size(); ++i) {
-    if (!samples[i]) continue;
-    lo = any ? std::min(lo, *samples[i]) : *samples[i];
-    hi = any ? std::max(hi, *samples[i]) : *samples[i];
-    any = true;
-  }
-  const std::string range = any ? fmt::format("{:+.3f} .. {:+.3f} {}", lo, hi, unit) : std::string("no data");
+  const auto r = sample_range(samples, from);
+  const std::string range = r ? fmt::format("{:+.3f} .. {:+.3f} {}", r->lo, r->hi, unit) : std::string("no data");
   const std::vector<std::optional<float>> shown(samples.begin() + static_cast<std::ptrdiff_t>(from), samples.end());
   out.push_back({fmt::format("  {:<16}{} {}", name, sparkline(shown, width, options.utf8), range), Tone::normal});
 }
@@ -134,14 +141,8 @@ std::string sparkline(const std::vector<std::optional<float>>& samples, std::siz
                                                       "\u2585", "\u2586", "\u2587", "\u2588"};
   static constexpr std::array<char, 8> kAscii{'_', '.', ',', '-', '~', '=', '^', '#'};
   const std::size_t from = samples.size() > width ? samples.size() - width : 0;
-  float lo = 0, hi = 0;
-  bool any = false;
-  for (std::size_t i = from; i < samples.size(); ++i) {
-    if (!samples[i]) continue;
-    lo = any ? std::min(lo, *samples[i]) : *samples[i];
-    hi = any ? std::max(hi, *samples[i]) : *samples[i];
-    any = true;
-  }
+  const auto r = sample_range(samples, from);
+  const float lo = r ? r->lo : 0, hi = r ? r->hi : 0;
   std::string out;
   for (std::size_t i = from; i < samples.size(); ++i) {
     if (!samples[i]) {
