@@ -53,6 +53,10 @@ class NotifyListener {
     std::strncpy(address.sun_path, path_.c_str(), sizeof address.sun_path - 1);
     ::unlink(path_.c_str());
     REQUIRE(::bind(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
+    // The kernel stamps each message as it is queued, in the sender's time: when a feed was sent does not depend
+    // on when this (shared, busy) machine lets the listener read it.
+    const int on = 1;
+    REQUIRE(::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) == 0);
   }
   ~NotifyListener() {
     ::close(fd_);
@@ -71,14 +75,40 @@ class NotifyListener {
     ::setenv("WATCHDOG_PID", std::to_string(pid).c_str(), 1);
   }
 
+  struct Message {
+    std::string text;
+    std::int64_t sent_realtime_ns = 0;  // CLOCK_REALTIME, the kernel's stamp
+  };
+
   // The next message within `timeout`, none when nothing came.
-  std::optional<std::string> receive(std::chrono::milliseconds timeout) const {
+  std::optional<Message> receive_stamped(std::chrono::milliseconds timeout) const {
     pollfd p{fd_, POLLIN, 0};
     if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return std::nullopt;
     char buffer[512];
-    const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+    iovec data{buffer, sizeof buffer};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+    msghdr header{};
+    header.msg_iov = &data;
+    header.msg_iovlen = 1;
+    header.msg_control = control;
+    header.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_, &header, 0);
     if (n <= 0) return std::nullopt;
-    return std::string(buffer, static_cast<std::size_t>(n));
+    Message message{std::string(buffer, static_cast<std::size_t>(n))};
+    for (cmsghdr* c = CMSG_FIRSTHDR(&header); c != nullptr; c = CMSG_NXTHDR(&header, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+        timespec stamp{};
+        std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
+        message.sent_realtime_ns = std::int64_t{stamp.tv_sec} * 1'000'000'000 + stamp.tv_nsec;
+      }
+    }
+    return message;
+  }
+
+  std::optional<std::string> receive(std::chrono::milliseconds timeout) const {
+    auto message = receive_stamped(timeout);
+    if (!message) return std::nullopt;
+    return std::move(message->text);
   }
 
  private:
@@ -165,8 +195,22 @@ enum class Hang { stuck_in_step, stopped_process };
 struct KillTimes {
   double stuck_to_kill_ms = 0;     // from the loop's last step to the manager's SIGABRT
   double stuck_to_exit_ms = 0;     // to the process gone, its motor stopped
-  double last_feed_after_ms = -1;  // the last WATCHDOG=1 after the loop's last step (negative: before)
+  double last_feed_after_ms = -1;  // the last WATCHDOG=1 sent after the loop's last step (negative: before)
+  int feeds_after_stuck = 0;       // WATCHDOG=1 sent after the loop's last step
   bool motor_off = false;
+};
+
+std::int64_t realtime_ns() {
+  timespec now{};
+  ::clock_gettime(CLOCK_REALTIME, &now);
+  return std::int64_t{now.tv_sec} * 1'000'000'000 + now.tv_nsec;
+}
+
+// When the loop took its last step, in both clocks: the monotonic one for the kill's timing, the realtime one to
+// compare with the kernel's stamps on the feeds.
+struct Stuck {
+  std::int64_t monotonic_ns = 0;
+  std::int64_t realtime_ns = 0;
 };
 
 // A lever-fw in miniature in a child: a real PWM motor on a sysfs tree of its own, driven at half torque by a real
@@ -206,7 +250,7 @@ KillTimes run_and_hang(Hang hang) {
           motor.value().command({0.5, true});
           watchdog.value().advanced(tick);
           if (tick == 300) {
-            const std::int64_t now = lever::platform::monotonic_ns();
+            const Stuck now{lever::platform::monotonic_ns(), realtime_ns()};
             if (::write(stuck_pipe[1], &now, sizeof now) != sizeof now) ::_exit(6);
             if (hang == Hang::stuck_in_step)
               for (;;) ::pause();  // a step that never ends: a hung write, a lock never released
@@ -217,20 +261,25 @@ KillTimes run_and_hang(Hang hang) {
   }
   ::close(stuck_pipe[1]);
   KillTimes times;
-  std::int64_t stuck_ns = 0;
+  Stuck stuck;
+  std::int64_t& stuck_ns = stuck.monotonic_ns;
   std::optional<std::int64_t> last_feed_ns, kill_ns;
+  std::vector<std::int64_t> feeds_sent_ns;
   // The manager: feeds are awaited at most WatchdogSec apart (from READY=1 on); a stopped process is one
   // way of hanging, done here once the loop has stepped 300 times.
   pollfd p{stuck_pipe[0], POLLIN, 0};
   bool ready = false;
   auto deadline = Clock::now() + 10s;
   while (!kill_ns && Clock::now() < deadline) {
-    if (const auto m = manager.receive(1ms)) {
-      if (contains(*m, "READY=1")) ready = true;
-      if (contains(*m, "WATCHDOG=1")) last_feed_ns = lever::platform::monotonic_ns();
+    if (const auto m = manager.receive_stamped(1ms)) {
+      if (contains(m->text, "READY=1")) ready = true;
+      if (contains(m->text, "WATCHDOG=1")) {
+        last_feed_ns = lever::platform::monotonic_ns();
+        feeds_sent_ns.push_back(m->sent_realtime_ns);
+      }
     }
     if (stuck_ns == 0 && ::poll(&p, 1, 0) > 0) {
-      if (::read(stuck_pipe[0], &stuck_ns, sizeof stuck_ns) != sizeof stuck_ns) {
+      if (::read(stuck_pipe[0], &stuck, sizeof stuck) != sizeof stuck) {
         int status = 0;
         ::waitpid(child, &status, 0);
         FAIL("the child ended before its loop hung, exit code " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1));
@@ -254,28 +303,31 @@ KillTimes run_and_hang(Hang hang) {
   if (WIFSIGNALED(status)) CHECK(WTERMSIG(status) == SIGABRT);
   times.stuck_to_kill_ms = static_cast<double>(*kill_ns - stuck_ns) * 1e-6;
   times.stuck_to_exit_ms = static_cast<double>(exit_ns - stuck_ns) * 1e-6;
-  times.last_feed_after_ms = static_cast<double>(*last_feed_ns - stuck_ns) * 1e-6;
+  times.last_feed_after_ms = static_cast<double>(feeds_sent_ns.back() - stuck.realtime_ns) * 1e-6;
+  for (const std::int64_t sent : feeds_sent_ns) times.feeds_after_stuck += sent > stuck.realtime_ns ? 1 : 0;
   times.motor_off = tree.read("enable") == "0" && tree.read("duty_cycle") == "0";
   return times;
 }
 
 }  // namespace
 
-TEST_CASE("loop watchdog: a loop stuck in a step, or a stopped process, has its motor off within WatchdogSec + 50 ms",
+TEST_CASE("loop watchdog: a loop stuck in a step, or a stopped process, is fed at most once more and its motor stopped",
           "[board][watchdog]") {
   const auto hang = GENERATE(Hang::stuck_in_step, Hang::stopped_process);
   CAPTURE(hang == Hang::stuck_in_step ? "stuck in a step" : "stopped process");
   const KillTimes t = run_and_hang(hang);
   std::printf(
-      "measured: loop watchdog, %s: last feed %.1f ms after the loop's last step, killed after %.1f ms, "
-      "gone with its motor off after %.1f ms (bound %lld ms)\n",
-      hang == Hang::stuck_in_step ? "stuck in a step" : "stopped process", t.last_feed_after_ms, t.stuck_to_kill_ms,
-      t.stuck_to_exit_ms, static_cast<long long>((kWatchdogSec + 50ms).count()));
+      "measured: loop watchdog, %s: %d feed(s) sent after the loop's last step, the last %.1f ms after it, killed "
+      "after %.1f ms, "
+      "gone with its motor off after %.1f ms (the service manager's bound %lld ms)\n",
+      hang == Hang::stuck_in_step ? "stuck in a step" : "stopped process", t.feeds_after_stuck, t.last_feed_after_ms,
+      t.stuck_to_kill_ms, t.stuck_to_exit_ms, static_cast<long long>((kWatchdogSec + 50ms).count()));
   CHECK(t.motor_off);
-  // The feeder fed nothing the loop did not do: its last feed is at most one check (50 ms) after the last step,
-  // so the kill comes within the bound; the slack is the scheduling of this test on a shared machine.
-  CHECK(t.last_feed_after_ms <= 50.0 + 25.0);
-  CHECK(t.stuck_to_kill_ms <= static_cast<double>((kWatchdogSec + 50ms).count()) + 25.0);
+  // The feeder fed nothing the loop did not do: after the loop's last step at most one feed, the check that saw
+  // that step, so the service manager kills within WatchdogSec + one check. Counted, not timed: when this busy
+  // machine schedules the feeder is not the feeder's logic. The bound in time is measured in virtual time on the
+  // board image, from the PWM controller's stamps (tests/image/safety_units.sh).
+  CHECK(t.feeds_after_stuck <= 1);
 }
 
 // Not run by ctest: it needs a watchdog device, and a mistake resets the machine. Run in the kernel rig's guest
