@@ -31,10 +31,9 @@ bridge_config() {  # bridge_config NAME CAN BIND PEER SITE_ID PEER_SITE_ID
 bridge_config site-a vcan0 127.0.0.1:5000 127.0.0.1:5001 1 2
 bridge_config site-b vcan1 127.0.0.1:5001 127.0.0.1:5000 2 1
 for site in site-a site-b; do
-  journalctl -q -f -n 0 -o cat -u "lever-bridge@$site" >"$out/bridge-$site.journal" &
+  journal_lines "lever-bridge@$site" "$work/bridge-$site.cursor" >"$out/bridge-$site.journal" &
   followers+=("$!")
 done
-sleep 0.5
 # The recording's directory is the unit's LogsDirectory=, made at the first start: --check-config refuses a
 # record path in a directory that does not exist yet (seen before the first start), so it is checked after.
 require "systemctl start lever-bridge@site-a lever-bridge@site-b" systemctl start lever-bridge@site-a lever-bridge@site-b

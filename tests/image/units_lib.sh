@@ -35,13 +35,23 @@ write_config() {
   diff "$work/$role.example" "$file" | sed -n 's/^> /  /p'
 }
 
-# follow ROLE: the unit's journal from now on, its status lines (JSON) to $out/ROLE.stats, the rest to ROLE.err
+# journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.
+# It polls with a cursor rather than following: a `journalctl -f -n 0` started just before the unit missed every
+# one of its lines in the bridges test (the TOP's, twice in a row, while the HSI's follower, started the same way,
+# saw all), and nothing told; a cursor cannot skip a line, nor miss one written before it started.
+journal_lines() {
+  while :; do
+    journalctl -q -u "$1" -o cat --cursor-file="$2"
+    sleep 0.2
+  done
+}
+
+# follow ROLE: the unit's journal, its status lines (JSON) to $out/ROLE.stats, the rest to ROLE.err
 follow() {
-  journalctl -q -f -n 0 -o cat -u "lever-fw@$1" |
-    awk -v s="$out/$1.stats" -v e="$out/$1.err" '/^\{/ { print > s; fflush(s); next } { print > e; fflush(e) }' &
+  # The loop is the background job (its pid is what stop_units kills), awk reads it through a process substitution.
+  journal_lines "lever-fw@$1" "$work/$1.cursor" \
+    > >(awk -v s="$out/$1.stats" -v e="$out/$1.err" '/^\{/ { print > s; fflush(s); next } { print > e; fflush(e) }') &
   followers+=("$!")
-  # journalctl is listening once it has read the journal's end; a line written before that would be lost.
-  sleep 0.5
 }
 
 # start_fw ROLE: systemctl start lever-fw@ROLE (Type=notify: returns once lever-fw said READY=1); ROLE_pid its
