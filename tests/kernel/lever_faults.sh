@@ -149,6 +149,7 @@ restart_top "after SIGKILL"
 # state, so the safe state is the driver's enable line going low, which PwmMotor does in the command whose write
 # failed. It writes a changed duty at once and an unchanged one every PwmMotor::kConfirmEvery (10) commands (a
 # TOP at rest against the wall holds one duty): so within 10 periods of the unexport, and one more for its phase.
+# Here the TOP is at work and its duty changes within that too; lever_unexport_at_rest.sh is the case at rest.
 poll_rt on
 clock_now
 before=$now
