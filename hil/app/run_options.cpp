@@ -166,11 +166,18 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
                  "position)")
       ->transform(program::one_of(kDeviceVelocities))
       ->default_str("driver");
-  cmd.add_option("--position-sensor", o.position_sensor,
-                 "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
-                 "kinematics, in doubles) or cartesian-grid (55 um cells, the model before issue 33)")
+  cmd.add_option(
+         "--position-sensor", o.position_sensor,
+         "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
+         "kinematics, in doubles), cartesian-grid (55 um cells, the model before issue 33) or exact (the simulated "
+         "tip's unquantized position: a diagnostic, no device's chain)")
       ->transform(program::one_of(kPositionSensors))
       ->default_str("joint-encoders");
+  cmd.add_option("--device-encoder-counts", o.device_encoder_counts,
+                 "sphere-3dof: each of the Omni's three joint encoders' counts per turn, with --position-sensor "
+                 "joint-encoders (a diagnostic: the device has 15000)")
+      ->check(program::number({100.0, 1e9, false, false, "a number of counts per turn"}))
+      ->default_str(fmt::format("{}", OmniParams{}.encoder_counts_per_rev));
   cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
       ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
@@ -264,6 +271,11 @@ std::string misplaced_options(const RunOptions& o) {
   if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
     return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
   if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
+  if (!sphere && o.device_encoder_counts)
+    return "--device-encoder-counts belongs to sphere-3dof (the levers' encoders: --encoder-counts)";
+  if (o.device_encoder_counts &&
+      o.position_sensor.value_or(SpherePositionSensor::joint_encoders) != SpherePositionSensor::joint_encoders)
+    return "--device-encoder-counts sets the joint encoders: it needs --position-sensor joint-encoders";
   if (sphere && o.config.gauge_chain != GaugeChain::topology)
     return "--gauge-chain belongs to the lever scenarios (sphere-3dof computes its force, it reads no gauge)";
   return {};
