@@ -183,6 +183,20 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
 }
 
+// The operator's motion on the lever scenarios' scripts.
+void add_operator_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--operator-speed", o.operator_speed,
+                 "lever scenarios: the operator's strokes this many times faster than the script's documented ranges "
+                 "(every move's time divided by it; 1: as documented)")
+      ->check(program::number({0.1, 10.0, false, false, "a factor"}))
+      ->default_str("1");
+  cmd.add_option("--operator-dwell", o.operator_dwell,
+                 "lever scenarios: the operator's pauses at the end of each move times this factor (0: no pause; 1: "
+                 "as documented)")
+      ->check(program::number({0.0, 10.0, false, false, "a factor"}))
+      ->default_str("1");
+}
+
 // Both levers' encoders.
 void add_encoder_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--encoder-counts", o.encoder_counts,
@@ -256,6 +270,7 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   add_link_options(cmd, o);
   add_passivity_options(cmd, o);
   add_encoder_options(cmd, o);
+  add_operator_options(cmd, o);
   add_display_options(cmd, o);
   add_device_options(cmd, o);
   add_homing_and_fault_options(cmd, o);
@@ -268,6 +283,9 @@ std::string misplaced_options(const RunOptions& o) {
   if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
     return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
            "no levers)";
+  if (sphere && (o.operator_speed || o.operator_dwell))
+    return "--operator-speed and --operator-dwell belong to the lever scenarios (sphere-3dof's hand has its own "
+           "model)";
   if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
     return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
   if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
@@ -292,6 +310,8 @@ SimConfig run_config(const RunOptions& o) {
   c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev =
       o.encoder_counts.value_or(c.hsi_firmware.counts_per_rev);
   c.encoder_interface = o.encoder_interface.value_or(c.encoder_interface);
+  c.operator_params.speed_factor = o.operator_speed.value_or(c.operator_params.speed_factor);
+  c.operator_params.dwell_factor = o.operator_dwell.value_or(c.operator_params.dwell_factor);
   c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);

@@ -25,6 +25,7 @@ struct RunOptions {
   std::optional<double> encoder_counts;
   std::optional<EncoderInterface> encoder_interface;
   std::optional<bool> hsi_force_loop;
+  std::optional<double> operator_speed, operator_dwell;
   std::optional<SphereVelocityChain> device_velocity;
   std::optional<SpherePositionSensor> position_sensor;
   std::optional<double> driver_cutoff_hz;

@@ -50,6 +50,13 @@ check "--position-sensor exact reaches the sphere" jq -e '.parameters.position_s
 check "--device-encoder-counts reaches the sphere" \
   jq -e '.parameters.device.encoder_counts_per_rev == 150000 and .parameters.position_sensor == "joint-encoders"' \
   "$work/s.json"
+"$hil" run --duration 0.5 --operator-speed 2 --operator-dwell 0 --json >"$work/o.json"
+check "--operator-speed and --operator-dwell reach the operator" \
+  jq -e '.parameters.operator_speed == 2 and .parameters.operator_dwell == 0' "$work/o.json"
+expect_bad "operator speed zero" "--operator-speed" run --operator-speed 0
+expect_bad "operator dwell negative" "--operator-dwell" run --operator-dwell -1
+expect_bad "operator options for the sphere" "--operator-speed and --operator-dwell belong to the lever scenarios" \
+  run --scenario sphere-3dof --operator-speed 2
 expect_bad "the Omni's encoders too coarse" "--device-encoder-counts" run --scenario sphere-3dof \
   --device-encoder-counts 5
 expect_bad "the Omni's encoders for a lever" "--device-encoder-counts belongs to sphere-3dof" run \
