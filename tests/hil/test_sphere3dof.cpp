@@ -211,7 +211,7 @@ TEST_CASE("at p = 0 over a lossless link every change is sent and the metric see
   }
 }
 
-TEST_CASE("the exact position is the tip's; read through the joint encoders the force is a staircase",
+TEST_CASE("the exact position is the tip's, and read through the joint encoders the force is a staircase",
           "[hil][sphere]") {
   // Share of the contact ticks on which the environment's force changes, at p = 0 over the LAN.
   auto changing = [](SpherePositionSensor sensor) {
