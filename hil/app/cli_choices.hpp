@@ -23,7 +23,9 @@ inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
 inline const program::Choices<SphereVelocityChain> kDeviceVelocities{{"driver", SphereVelocityChain::driver},
                                                                      {"difference", SphereVelocityChain::difference}};
 inline const program::Choices<SpherePositionSensor> kPositionSensors{
-    {"joint-encoders", SpherePositionSensor::joint_encoders}, {"cartesian-grid", SpherePositionSensor::cartesian_grid}};
+    {"joint-encoders", SpherePositionSensor::joint_encoders},
+    {"cartesian-grid", SpherePositionSensor::cartesian_grid},
+    {"exact", SpherePositionSensor::exact}};
 inline const program::Choices<GaugeChain> kGaugeChains{
     {"topology", GaugeChain::topology}, {"dad141", GaugeChain::dad141}, {"paper-adc", GaugeChain::paper_adc}};
 inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};

@@ -106,6 +106,8 @@ nlohmann::json parameters_json(const SimConfig& config) {
           {"encoder_counts_per_turn", config.hsi_firmware.counts_per_rev},
           {"encoder_interface", config.encoder_interface == EncoderInterface::counter ? "counter" : "gpio-events"},
           {"motion_velocity", motion_velocity_name(config.hsi_firmware.motion_velocity)},
+          {"operator_speed", config.operator_params.speed_factor},
+          {"operator_dwell", config.operator_params.dwell_factor},
           {"jnd", config.jnd},
           {"jnd_absolute_n", config.jnd_absolute_n},
           {"substeps", config.substeps},

@@ -166,14 +166,35 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
                  "position)")
       ->transform(program::one_of(kDeviceVelocities))
       ->default_str("driver");
-  cmd.add_option("--position-sensor", o.position_sensor,
-                 "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
-                 "kinematics, in doubles) or cartesian-grid (55 um cells, the model before issue 33)")
+  cmd.add_option(
+         "--position-sensor", o.position_sensor,
+         "sphere-3dof: how the OP reads the tip, joint-encoders (the Omni's three 15000-count encoders and its "
+         "kinematics, in doubles), cartesian-grid (55 um cells, the model before issue 33) or exact (the simulated "
+         "tip's unquantized position: a diagnostic, no device's chain)")
       ->transform(program::one_of(kPositionSensors))
       ->default_str("joint-encoders");
+  cmd.add_option("--device-encoder-counts", o.device_encoder_counts,
+                 "sphere-3dof: each of the Omni's three joint encoders' counts per turn, with --position-sensor "
+                 "joint-encoders (a diagnostic: the device has 15000)")
+      ->check(program::number({100.0, 1e9, false, false, "a number of counts per turn"}))
+      ->default_str(fmt::format("{}", OmniParams{}.encoder_counts_per_rev));
   cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
       ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
+}
+
+// The operator's motion on the lever scenarios' scripts.
+void add_operator_options(CLI::App& cmd, RunOptions& o) {
+  cmd.add_option("--operator-speed", o.operator_speed,
+                 "lever scenarios: the operator's strokes this many times faster than the script's documented ranges "
+                 "(every move's time divided by it; 1: as documented)")
+      ->check(program::number({0.1, 10.0, false, false, "a factor"}))
+      ->default_str("1");
+  cmd.add_option("--operator-dwell", o.operator_dwell,
+                 "lever scenarios: the operator's pauses at the end of each move times this factor (0: no pause; 1: "
+                 "as documented)")
+      ->check(program::number({0.0, 10.0, false, false, "a factor"}))
+      ->default_str("1");
 }
 
 // Both levers' encoders.
@@ -249,6 +270,7 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
   add_link_options(cmd, o);
   add_passivity_options(cmd, o);
   add_encoder_options(cmd, o);
+  add_operator_options(cmd, o);
   add_display_options(cmd, o);
   add_device_options(cmd, o);
   add_homing_and_fault_options(cmd, o);
@@ -261,9 +283,17 @@ std::string misplaced_options(const RunOptions& o) {
   if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
     return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
            "no levers)";
+  if (sphere && (o.operator_speed || o.operator_dwell))
+    return "--operator-speed and --operator-dwell belong to the lever scenarios (sphere-3dof's hand has its own "
+           "model)";
   if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
     return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
   if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
+  if (!sphere && o.device_encoder_counts)
+    return "--device-encoder-counts belongs to sphere-3dof (the levers' encoders: --encoder-counts)";
+  if (o.device_encoder_counts &&
+      o.position_sensor.value_or(SpherePositionSensor::joint_encoders) != SpherePositionSensor::joint_encoders)
+    return "--device-encoder-counts sets the joint encoders: it needs --position-sensor joint-encoders";
   if (sphere && o.config.gauge_chain != GaugeChain::topology)
     return "--gauge-chain belongs to the lever scenarios (sphere-3dof computes its force, it reads no gauge)";
   return {};
@@ -280,6 +310,8 @@ SimConfig run_config(const RunOptions& o) {
   c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev =
       o.encoder_counts.value_or(c.hsi_firmware.counts_per_rev);
   c.encoder_interface = o.encoder_interface.value_or(c.encoder_interface);
+  c.operator_params.speed_factor = o.operator_speed.value_or(c.operator_params.speed_factor);
+  c.operator_params.dwell_factor = o.operator_dwell.value_or(c.operator_params.dwell_factor);
   c.hsi_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.top_firmware.comms_timeout = static_cast<fw::Tick>(o.comms_timeout_ms);
   c.hsi_firmware.rest_repeat = static_cast<fw::Tick>(o.rest_repeat_ms);

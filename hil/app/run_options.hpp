@@ -25,9 +25,11 @@ struct RunOptions {
   std::optional<double> encoder_counts;
   std::optional<EncoderInterface> encoder_interface;
   std::optional<bool> hsi_force_loop;
+  std::optional<double> operator_speed, operator_dwell;
   std::optional<SphereVelocityChain> device_velocity;
   std::optional<SpherePositionSensor> position_sensor;
   std::optional<double> driver_cutoff_hz;
+  std::optional<double> device_encoder_counts;
   double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);
   bool no_homing = false;
   fw::PassivityMode passivity = fw::PassivityMode::off;

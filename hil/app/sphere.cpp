@@ -61,6 +61,7 @@ SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options)
   c.velocity_chain = options.device_velocity.value_or(c.velocity_chain);
   c.driver_cutoff_hz = options.driver_cutoff_hz.value_or(c.driver_cutoff_hz);
   c.position_sensor = options.position_sensor.value_or(c.position_sensor);
+  c.device.encoder_counts_per_rev = options.device_encoder_counts.value_or(c.device.encoder_counts_per_rev);
   return c;
 }
 
@@ -95,8 +96,9 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"loss", c.network.loss},
         {"device_velocity", c.velocity_chain == SphereVelocityChain::driver ? "driver" : "difference"},
         {"driver_cutoff_hz", c.driver_cutoff_hz},
-        {"position_sensor",
-         c.position_sensor == SpherePositionSensor::joint_encoders ? "joint-encoders" : "cartesian-grid"},
+        {"position_sensor", c.position_sensor == SpherePositionSensor::joint_encoders   ? "joint-encoders"
+                            : c.position_sensor == SpherePositionSensor::cartesian_grid ? "cartesian-grid"
+                                                                                        : "exact"},
         {"jnd", c.jnd},
         {"jnd_absolute_n", c.jnd_absolute_n},
         {"substeps", c.substeps},

@@ -25,6 +25,9 @@ HumanOperator::HumanOperator(const OperatorParams& p, ScenarioKind scenario, dou
     : p_(p), scenario_(scenario), wall_(wall_angle), rng_(seed), intent_angle_(start_angle) {
   if (scenario == ScenarioKind::sphere_3dof)
     throw std::invalid_argument("sphere-3dof has no lever: lever::hil::run_sphere runs it");
+  if (!(p.speed_factor > 0.0) || !std::isfinite(p.speed_factor) || !(p.dwell_factor >= 0.0) ||
+      !std::isfinite(p.dwell_factor))
+    throw std::invalid_argument("the operator's speed factor must be > 0 and its dwell factor >= 0");
   move_from_ = start_angle;
   start(next_segment(), 0.0);
 }
@@ -71,8 +74,10 @@ void HumanOperator::update(fw::Tick now, double felt_force) {
 // on x86-64 and left to right on Arm, which made the same seed another run there. The others are drawn before, in
 // x86-64's order (last argument first), so that its runs stay what they were.
 Segment HumanOperator::next_segment() {
-  auto move = [](double target, double move_s, double dwell_s) {
-    return Segment{Segment::Kind::move, target, 0.0, move_s + dwell_s, move_s};
+  // Factors of 1 leave every time exactly as drawn, so the default runs keep their bytes.
+  auto move = [this](double target, double move_s, double dwell_s) {
+    const double m = move_s / p_.speed_factor;
+    return Segment{Segment::Kind::move, target, 0.0, m + dwell_s * p_.dwell_factor, m};
   };
   switch (scenario_) {
     case ScenarioKind::free_motion:

@@ -33,8 +33,15 @@ void SphereOp::sample(double t, Nanos t_ns, const Vec3& position, Uplink& up) {
 }
 
 Vec3 SphereOp::measure(const Vec3& tip) const {
-  return c_.position_sensor == SpherePositionSensor::cartesian_grid ? quantize(tip, c_.device.resolution_m)
-                                                                    : kinematics_.measure(tip);
+  switch (c_.position_sensor) {
+    case SpherePositionSensor::cartesian_grid:
+      return quantize(tip, c_.device.resolution_m);
+    case SpherePositionSensor::exact:
+      return tip;
+    case SpherePositionSensor::joint_encoders:
+      break;
+  }
+  return kinematics_.measure(tip);
 }
 
 void SphereOp::display(std::uint64_t k, Nanos t_ns, Downlink& down) {

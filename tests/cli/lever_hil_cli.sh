@@ -44,6 +44,25 @@ check "--gauge-chain dad141 in one controller takes the DAD's settings" \
   jq -e '.parameters | .gauge_chain == "dad141" and .gauge_filter_hz == 4' "$work/d.json"
 "$hil" run --scenario sphere-3dof --duration 0.5 --position-sensor cartesian-grid --json >"$work/s.json"
 check "--position-sensor reaches the sphere" jq -e '.parameters.position_sensor == "cartesian-grid"' "$work/s.json"
+"$hil" run --scenario sphere-3dof --duration 0.5 --position-sensor exact --json >"$work/s.json"
+check "--position-sensor exact reaches the sphere" jq -e '.parameters.position_sensor == "exact"' "$work/s.json"
+"$hil" run --scenario sphere-3dof --duration 0.5 --device-encoder-counts 150000 --json >"$work/s.json"
+check "--device-encoder-counts reaches the sphere" \
+  jq -e '.parameters.device.encoder_counts_per_rev == 150000 and .parameters.position_sensor == "joint-encoders"' \
+  "$work/s.json"
+"$hil" run --duration 0.5 --operator-speed 2 --operator-dwell 0 --json >"$work/o.json"
+check "--operator-speed and --operator-dwell reach the operator" \
+  jq -e '.parameters.operator_speed == 2 and .parameters.operator_dwell == 0' "$work/o.json"
+expect_bad "operator speed zero" "--operator-speed" run --operator-speed 0
+expect_bad "operator dwell negative" "--operator-dwell" run --operator-dwell -1
+expect_bad "operator options for the sphere" "--operator-speed and --operator-dwell belong to the lever scenarios" \
+  run --scenario sphere-3dof --operator-speed 2
+expect_bad "the Omni's encoders too coarse" "--device-encoder-counts" run --scenario sphere-3dof \
+  --device-encoder-counts 5
+expect_bad "the Omni's encoders for a lever" "--device-encoder-counts belongs to sphere-3dof" run \
+  --device-encoder-counts 150000
+expect_bad "the Omni's encoders without them" "it needs --position-sensor joint-encoders" run --scenario sphere-3dof \
+  --position-sensor exact --device-encoder-counts 150000
 
 args=(run --scenario wall-tap --duration 2 --seed 7 --delay-ms 10 --jitter-ms 3 --loss 0.05 --fault link-down@1+0.2 --json)
 "$hil" "${args[@]}" >"$work/a.json"; check "run --json exits 0" test $? -eq 0

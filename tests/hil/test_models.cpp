@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <vector>
 
 #include "lever/fw/quadrature_decoder.hpp"
 #include "lever/hil/can_bus.hpp"
@@ -198,5 +200,41 @@ TEST_CASE("the operator's intent follows the scenario", "[hil][operator]") {
     }
     CHECK(op.segment().kind == Segment::Kind::press);
     CHECK(felt == Approx(target).epsilon(0.05));
+  }
+  SECTION("the speed and dwell factors scale every move's time and pause, on the same draws") {
+    // The same seed draws the same segments; each move's time is divided by the speed factor, each pause (the
+    // segment's time after its move) multiplied by the dwell factor; presses keep their length.
+    auto segments = [](double speed, double dwell) {
+      OperatorParams p;
+      p.speed_factor = speed;
+      p.dwell_factor = dwell;
+      HumanOperator op(p, ScenarioKind::wall_tap, 0.3, 0.1, 7);
+      std::vector<Segment> out{op.segment()};
+      for (fw::Tick t = 1; out.size() < 40; ++t) {
+        op.update(t, 0.0);
+        if (op.segment().duration_s != out.back().duration_s || op.segment().kind != out.back().kind ||
+            op.segment().target_angle != out.back().target_angle)
+          out.push_back(op.segment());
+      }
+      return out;
+    };
+    const auto base = segments(1.0, 1.0), scaled = segments(2.0, 3.0);
+    int moves_with_pause = 0;
+    for (std::size_t i = 0; i < base.size(); ++i) {
+      REQUIRE(scaled[i].kind == base[i].kind);
+      if (base[i].kind == Segment::Kind::press) {
+        CHECK(scaled[i].duration_s == base[i].duration_s);
+        continue;
+      }
+      CHECK(scaled[i].target_angle == base[i].target_angle);
+      CHECK(scaled[i].move_s == Approx(base[i].move_s / 2.0));
+      const double pause = base[i].duration_s - base[i].move_s;
+      CHECK(scaled[i].duration_s - scaled[i].move_s == Approx(3.0 * pause).margin(1e-12));
+      moves_with_pause += pause > 0.0 ? 1 : 0;
+    }
+    CHECK(moves_with_pause > 5);
+    OperatorParams still;
+    still.speed_factor = 0.0;
+    CHECK_THROWS_AS(HumanOperator(still, ScenarioKind::wall_tap, 0.3, 0.1, 1), std::invalid_argument);
   }
 }

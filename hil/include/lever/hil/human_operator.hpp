@@ -17,6 +17,10 @@ struct OperatorParams {
   double arm = 0.1;                 // m: handle radius, for torque <-> force
   int reaction_delay_ticks = 60;    // ms: spinal/cortical force-loop delay
   double force_bandwidth_hz = 1.5;  // how fast a person corrects a felt force error
+  // Factors on the scenario script's documented ranges (docs/hil-model.md, "Scenarios"), for sweeps: every move
+  // takes its time over speed_factor, every pause at the end of a move its time times dwell_factor.
+  double speed_factor = 1.0;
+  double dwell_factor = 1.0;
 };
 
 // sphere_3dof is the paper's 3-DoF experiment: no lever, no HumanOperator (lever/hil/sphere3dof.hpp).

@@ -58,8 +58,9 @@ enum class SphereVelocityChain : std::uint8_t { driver, difference };
 
 // How the OP reads the tip's position (docs/hil-model.md, "The position as the Omni measures it"): as the Omni does,
 // three joint encoders and the kinematics, in doubles; or, for comparison, quantized on a Cartesian grid of the data
-// sheet's resolution (the model before issue 33).
-enum class SpherePositionSensor : std::uint8_t { joint_encoders, cartesian_grid };
+// sheet's resolution (the model before issue 33); or, as a diagnostic that is no device's chain, the tip's exact
+// position, unquantized.
+enum class SpherePositionSensor : std::uint8_t { joint_encoders, cartesian_grid, exact };
 
 struct SphereTraceRow {
   double t = 0.0;
