@@ -54,9 +54,10 @@ class NotifyListener {
     ::unlink(path_.c_str());
     REQUIRE(::bind(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
     // The kernel stamps each message as it is queued, in the sender's time: when a feed was sent does not depend
-    // on when this (shared, busy) machine lets the listener read it.
+    // on when this (shared, busy) machine lets the listener read it. SO_TIMESTAMP (microseconds): qemu-user,
+    // which runs these tests for arm64, translates it and refuses SO_TIMESTAMPNS.
     const int on = 1;
-    REQUIRE(::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) == 0);
+    REQUIRE(::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on) == 0);
   }
   ~NotifyListener() {
     ::close(fd_);
@@ -86,7 +87,7 @@ class NotifyListener {
     if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return std::nullopt;
     char buffer[512];
     iovec data{buffer, sizeof buffer};
-    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval))];
     msghdr header{};
     header.msg_iov = &data;
     header.msg_iovlen = 1;
@@ -96,10 +97,10 @@ class NotifyListener {
     if (n <= 0) return std::nullopt;
     Message message{std::string(buffer, static_cast<std::size_t>(n))};
     for (cmsghdr* c = CMSG_FIRSTHDR(&header); c != nullptr; c = CMSG_NXTHDR(&header, c)) {
-      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
-        timespec stamp{};
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP) {
+        timeval stamp{};
         std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
-        message.sent_realtime_ns = std::int64_t{stamp.tv_sec} * 1'000'000'000 + stamp.tv_nsec;
+        message.sent_realtime_ns = (std::int64_t{stamp.tv_sec} * 1'000'000 + stamp.tv_usec) * 1'000;
       }
     }
     return message;
