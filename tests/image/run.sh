@@ -1,16 +1,20 @@
 #!/usr/bin/env bash
-# An image test: this tree's amd64 packages (scripts/package), the board image with them installed and the test's
-# files added (scripts/board-image, its base cached), booted in virtual time (tools/board-image/boot), where
+# An image test: this tree's packages (scripts/package), the board image with them installed and the test's files
+# added (scripts/board-image, its base cached), booted in virtual time (tools/board-image/boot), where
 # lever-image-test.service runs tests/image/SCRIPT. Exits with the test's status; each step's wall time printed.
-# usage: run.sh BUILD_DIR SOURCE_DIR SCRIPT [BOOT_OPTION...]
+# usage: run.sh [--arch arm64] BUILD_DIR SOURCE_DIR SCRIPT [BOOT_OPTION...]
+#   --arch arm64  the arm64 board: the packages of BUILD_DIR/cross/arm64 (the tree of the cross test, built)
 set -euo pipefail
+arch=amd64
+[[ ${1:-} == --arch ]] && { arch=${2:?}; shift 2; }
 build=$1 source=$2 script=$3
 shift 3
-work=$build/image-test/${script%.sh}
+tree=$build work=$build/image-test/${script%.sh}
+[[ $arch == amd64 ]] || tree=$build/cross/$arch work=$build/image-test/$arch-${script%.sh}
 rm -rf "$work"
 mkdir -p "$work/dist" "$work/add"
 t=$SECONDS
-"$source/scripts/package" amd64 "$build" "$work/dist" >/dev/null
+"$source/scripts/package" "$arch" "$tree" "$work/dist" >/dev/null
 echo "image test: packages in $((SECONDS - t)) s"
 # The board's test files: the unit that runs the test, the tests and the rig's gpio-sim helper at their places in
 # the source tree (the scripts find each other by relative paths).
@@ -21,7 +25,7 @@ cp -a "$source/tests/kernel" "$source/tests/image" "$lib/tests/"
 cp -a "$source/tools/kernel-rig/gpio-sim-chip" "$lib/tools/kernel-rig/"
 cp -a "$source/firmware/config" "$lib/firmware/"
 t=$SECONDS
-"$source/scripts/board-image" --add "$work/add" amd64 "$work/dist" "$work/image" >/dev/null
+"$source/scripts/board-image" --add "$work/add" "$arch" "$work/dist" "$work/image" >/dev/null
 echo "image test: board image in $((SECONDS - t)) s ($(tr '\n' ';' <"$work/image/times"))"
 t=$SECONDS
 status=0

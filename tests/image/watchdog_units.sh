@@ -11,8 +11,11 @@ if [[ -f $share/watchdog-phase ]]; then
   . "$(cd "$(dirname "$0")/../kernel" && pwd)/lib.sh" /usr/bin
   read -r crashed_at timeout_s <"$share/watchdog-phase"
   booted_at=$(awk -v now="$EPOCHREALTIME" '{ printf "%.1f", now - $1 }' /proc/uptime)
-  check "the board booted again after its kernel stopped ($(grep -c 'SeaBIOS' "$share/console.log") power-ons on its console)" \
-    test "$(grep -c 'Kernel panic' "$share/console.log")" -ge 1 -a "$(grep -c 'SeaBIOS' "$share/console.log")" -ge 2
+  # A power-on on the console: the PC's firmware (amd64), or the kernel's first line where QEMU loads it with no
+  # firmware of its own to print (arm64's virt).
+  power_ons=$(grep -a -c -E 'SeaBIOS|Booting Linux on physical CPU' "$share/console.log")
+  check "the board booted again after its kernel stopped ($power_ons power-ons on its console)" \
+    test "$(grep -c 'Kernel panic' "$share/console.log")" -ge 1 -a "$power_ons" -ge 2
   # The i6300esb keeps a flag across the reset it caused, which its driver reports as WDIOF_CARDRESET (0x20).
   status=$(cat /sys/class/watchdog/watchdog0/bootstatus 2>/dev/null)
   check "and the watchdog says it reset the board: bootstatus $status (WDIOF_CARDRESET 32)" \
