@@ -36,9 +36,8 @@ write_config() {
 }
 
 # journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.
-# It polls with a cursor rather than following: a `journalctl -f -n 0` started just before the unit missed every
-# one of its lines in the bridges test (the TOP's, twice in a row, while the HSI's follower, started the same way,
-# saw all), and nothing told; a cursor cannot skip a line, nor miss one written before it started.
+# It polls with a cursor rather than following: a `journalctl -f -n 0` started just before its unit can miss all of
+# its lines without a word; a cursor cannot skip a line, nor miss one written before it started.
 journal_lines() {
   while :; do
     journalctl -q -u "$1" -o cat --cursor-file="$2"

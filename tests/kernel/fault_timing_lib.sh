@@ -53,7 +53,8 @@ pwm_disabled() {
   local enabled rest
   read -r enabled rest <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" && [[ $enabled == 0 ]]
 }
-top_enable_low() { local value; read -r value <"$top_gpio/sim_gpio2/value" && [[ $value == 0 ]]; }
+# enable_low ROLE: the lever's driver enable line (MOTOR_EN, line 2) low
+enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 0 ]]; }
 # poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
 # serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }

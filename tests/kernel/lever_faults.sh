@@ -157,7 +157,7 @@ echo 0 >/sys/class/pwm/pwmchip"$(pwm_chip top)"/unexport
 clock_now
 t0=$now  # the channel is gone once the kernel has removed it: the lever's time counts from there
 echo "the unexport took $(ms_since "$before" "$t0") ms in the kernel"
-time_to "TOP's PWM unexported: its driver disabled (enable line low)" 0 $(((10 + 1) * tick_ms)) "$t0" top_enable_low
+time_to "TOP's PWM unexported: its driver disabled (enable line low)" 0 $(((10 + 1) * tick_ms)) "$t0" enable_low top
 poll_rt off
 check "and the TOP latched MOTOR_DRIVER" wait_for 5 top '.faults | index("motor_driver") != null'
 echo "the TOP's controller after the unexport (it runs on): $(pwm_hw top)"

@@ -5,8 +5,8 @@
 # confirming write (an unchanged duty written again every PwmMotor::kConfirmEvery commands) meets the gone channel,
 # and its release takes the driver's enable line low. Code that writes only a changed duty notices at the next
 # change, or never. The operator keeps hands off (serve --hands-off): the HSI rests, its motor showing the TOP's
-# gauge at rest, a duty that moves by one step now and then (seen: 0 and 49 ns, held 100 to 500 ms); the TOP
-# hunts between two encoder counts, its duty changing every few periods, so it is the HSI's channel that goes.
+# gauge at rest, a duty that moves by one step now and then; the TOP hunts between two encoder counts, its duty
+# changing every few periods, so it is the HSI's channel that goes.
 # usage: lever_unexport_at_rest.sh BIN_DIR
 set -uo pipefail
 . "$(dirname "$0")/lib.sh"
@@ -21,14 +21,13 @@ require "lever-ctl arm: both armed" lever_ctl vcan0 arm
 tick_ms=1  # the loop's period, 1 kHz
 mono_offset
 
-hsi_enable_low() { local value; read -r value <"$hsi_gpio/sim_gpio2/value" && [[ $value == 0 ]]; }
 # held MS: the HSI's controller programmed with nothing new for the last MS ms (its own stamp of its last state),
 # enabled, and its driver enabled
 held() {
   local enabled period duty polarity applies last_ns
   read -r enabled period duty polarity applies last_ns < <(pwm_hw hsi)
   clock_now
-  [[ $enabled == 1 ]] && ! hsi_enable_low && ((now - (last_ns / 1000 - offset_us) >= $1 * 1000))
+  [[ $enabled == 1 ]] && ! enable_low hsi && ((now - (last_ns / 1000 - offset_us) >= $1 * 1000))
 }
 wait_held() {
   local deadline=$((SECONDS + 30))
@@ -47,7 +46,7 @@ t0=$now
 echo "the HSI's controller before the unexport: $held_state; the unexport took $(ms_since "$before" "$t0") ms"
 # The confirming write comes within kConfirmEvery (10) commands of the unexport, one more period for its phase.
 time_to "HSI at rest, its PWM unexported: its driver disabled (enable line low)" 0 $(((10 + 1) * tick_ms)) "$t0" \
-  hsi_enable_low
+  enable_low hsi
 poll_rt off
 check "and the HSI latched MOTOR_DRIVER" wait_for 5 hsi '.faults | index("motor_driver") != null'
 echo "the HSI's controller after the unexport (it runs on at its last state): $(pwm_hw hsi)"
