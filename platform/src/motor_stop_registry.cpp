@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdlib>
 
+#include "motor_lines.hpp"
 #include "sysfs_write.hpp"
 
 namespace lever::platform {
@@ -20,6 +21,7 @@ struct Slot {
   std::atomic<bool> taken{false};
   std::atomic<int> duty_fd{-1};
   std::atomic<int> enable_fd{-1};
+  std::atomic<int> enable_line_fd{-1};
   std::atomic<pid_t> owner{0};
   std::atomic<pid_t> commanding{0};  // the thread in a command of this motor, 0: none
 };
@@ -60,8 +62,10 @@ void stop_slots(bool only_own) noexcept {
   for (Slot& slot : slots) {
     if (only_own && slot.owner.load() != self) continue;
     wait_for_command(slot, this_thread, deadline_ms);
+    const int line = slot.enable_line_fd.load();
     const int duty = slot.duty_fd.load();
     const int enable = slot.enable_fd.load();
+    if (line >= 0) set_line_request(line, false);
     if (duty >= 0) write_decimal(duty, 0);
     if (enable >= 0) write_decimal(enable, 0);
   }
@@ -76,7 +80,7 @@ extern "C" void stop_motors_at_exit() { stop_slots(true); }
 
 }  // namespace
 
-int register_motor_stop(int duty_fd, int enable_fd) noexcept {
+int register_motor_stop(int duty_fd, int enable_fd, int enable_line_fd) noexcept {
   if (!exit_hook_installed.exchange(true)) std::atexit(stop_motors_at_exit);
   for (std::size_t i = 0; i < slots.size(); ++i) {
     Slot& slot = slots[i];
@@ -85,6 +89,7 @@ int register_motor_stop(int duty_fd, int enable_fd) noexcept {
     slot.owner.store(::getpid());
     slot.duty_fd.store(duty_fd);
     slot.enable_fd.store(enable_fd);
+    slot.enable_line_fd.store(enable_line_fd);
     return static_cast<int>(i);
   }
   return -1;
@@ -95,6 +100,7 @@ void unregister_motor_stop(int slot_index) noexcept {
   Slot& slot = slots[static_cast<std::size_t>(slot_index)];
   slot.duty_fd.store(-1);
   slot.enable_fd.store(-1);
+  slot.enable_line_fd.store(-1);
   // A stop on another thread may hold the old numbers; it is a few writes long. A stop interrupting this very
   // thread has finished before this line runs again.
   while (stops_running.load() != 0) ::sched_yield();

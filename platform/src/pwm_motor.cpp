@@ -71,7 +71,8 @@ Result<PwmMotor> PwmMotor::open(const PwmMotorConfig& config) {
   if (!pwm) return pwm.error();
   auto lines = MotorLines::open(config);
   if (!lines) return lines.error();
-  const int slot = register_motor_stop(pwm.value().duty_fd(), pwm.value().enable_fd());
+  const int slot =
+      register_motor_stop(pwm.value().duty_fd(), pwm.value().enable_fd(), lines.value().enable_request_fd());
   if (slot < 0) {
     return Error{"motor " + pwm.value().description() + ": " + std::to_string(kMaxStoppableMotors) +
                      " motors are open already (the emergency stop has room for no more)",
@@ -128,6 +129,17 @@ const PwmMotorStats& PwmMotor::stats() const noexcept {
 const std::string& PwmMotor::description() const noexcept {
   static const std::string moved = "(moved from)";
   return impl_ ? impl_->description : moved;
+}
+
+MotorGuardHandles PwmMotor::guard_handles() const noexcept {
+  if (!impl_) return {};
+  return {impl_->pwm.duty_fd(), impl_->pwm.enable_fd(), impl_->lines.enable_request_fd()};
+}
+
+void PwmMotor::note_external_stop() noexcept {
+  if (!impl_) return;
+  impl_->pwm.forget_written();
+  impl_->lines.forget_written();
 }
 
 void PwmMotor::emergency_stop_all() noexcept { emergency_stop_registered_motors(); }

@@ -25,6 +25,11 @@ class SysfsPwm {
   // The next set_duty_ns writes even the value last written: the kernel's PWM core takes an unchanged state
   // without touching the hardware, and the write proves the channel is still there.
   void confirm_duty_next() noexcept { duty_written_.reset(); }
+  // The next writes happen whatever was written before: another process (the motor guard) may have written since.
+  void forget_written() noexcept {
+    duty_written_.reset();
+    enabled_written_.reset();
+  }
   // Duty 0 then disabled, written whatever was written before.
   void stop() noexcept;
 

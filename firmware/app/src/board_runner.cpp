@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <stop_token>
@@ -17,6 +18,7 @@
 #include "lever/platform/latest_value.hpp"
 #include "lever/platform/loop_watchdog.hpp"
 #include "lever/platform/modbus_gauge.hpp"
+#include "lever/platform/motor_guard.hpp"
 #include "lever/platform/motor_stop_signals.hpp"
 #include "lever/platform/pwm_motor.hpp"
 #include "lever/platform/realtime_loop.hpp"
@@ -55,8 +57,8 @@ std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
 }
 
 template <typename Role>
-int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::ModbusGauge>& gauge, bool json_lines,
-              const std::atomic<bool>& stop_flag) {
+int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::ModbusGauge>& gauge,
+              platform::MotorGuard& guard, bool json_lines, const std::atomic<bool>& stop_flag) {
   // The watchdog's thread and the printer start before the loop raises this thread to SCHED_FIFO with
   // SCHED_RESET_ON_FORK: started after, they would run SCHED_OTHER; started now they keep the service's own
   // scheduling (FIFO 50 in lever-fw@.service), below the loop, ahead of ordinary load.
@@ -121,11 +123,18 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   long faults_at_start = -1;
   loop.run(
       [&](fw::Tick now) {
-        if (stop_flag.load(std::memory_order_relaxed) || platform::stop_signal_received() != 0) stop.request_stop();
+        if (stop_flag.load(std::memory_order_relaxed) || platform::stop_signal_received() != 0 ||
+            platform::MotorGuard::lost()) {
+          stop.request_stop();
+        }
+        // The guard stopped the motor while this loop did not step: the hardware no longer holds what the motor
+        // last wrote (the step itself finds the gap and latches TIMING).
+        if (guard.take_trip()) hal.motor_.note_external_stop();
         hal.force_.now_tick = now;
         hal.force_.now_ns = platform::monotonic_ns();
         lever.step(now);
         watchdog.value().advanced(now);  // after the step: only a step that ended feeds the watchdogs
+        guard.stepped(hal.force_.now_ns);
         if (now % 100 == 0) latest.publish(snapshot(lever, now));
         if (now % 1000 == 0) {  // once a second: a histogram walk and one system call
           const long faults = thread_minor_faults();
@@ -142,6 +151,11 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   printer.request_stop();
   hal.motor_.command({0.0, false});  // the safe state before the objects go (their destructors stop it again)
   watchdog.value().stop();
+  if (platform::MotorGuard::lost()) {
+    // Restarted by the service manager (exit 1), the lever comes back with a guard of its own.
+    fmt::print(stderr, "lever-fw: the motor guard (pid {}) ended: motor stopped; exit 1\n", guard.pid());
+    return kRuntimeFailure;
+  }
   fmt::print(stderr, "lever-fw: stopped; motor at zero torque and disabled\n");
   return 0;
 }
@@ -156,6 +170,21 @@ int run_board(const FwConfig& config, bool json_lines, const std::string& motor_
       return kRuntimeFailure;
     }
   }
+  // The motor first, and its guard with it: from here on, whatever happens to this process stops the motor.
+  auto motor = opened(platform::PwmMotor::open(motor_config(config.board)), "motor");
+  if (!motor) return kRuntimeFailure;
+  if (auto installed = platform::install_motor_stop_signal_handlers(); !installed) {
+    fmt::print(stderr, "lever-fw: cannot install the signal handlers: {}\n", installed.error().message);
+    return kRuntimeFailure;
+  }
+  platform::MotorGuardConfig guard_config;
+  // One above the loop: a loop spinning at its own priority on a single CPU cannot starve its guard.
+  if (config.board.realtime_priority > 0) {
+    guard_config.fifo_priority = static_cast<int>(std::min<std::int64_t>(config.board.realtime_priority + 1, 99));
+  }
+  auto guard = opened(platform::MotorGuard::start(guard_config, motor->guard_handles()), "motor guard");
+  if (!guard) return kRuntimeFailure;
+  fmt::print(stderr, "lever-fw: {}\n", guard->description());
   auto encoder = opened(platform::GpioEncoder::open(encoder_config(config.board)), "encoder");
   if (!encoder) return kRuntimeFailure;
   std::optional<platform::ModbusGauge> gauge;
@@ -165,20 +194,15 @@ int run_board(const FwConfig& config, bool json_lines, const std::string& motor_
     gauge = opened(platform::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
     if (!gauge) return kRuntimeFailure;
   }
-  auto motor = opened(platform::PwmMotor::open(motor_config(config.board)), "motor");
-  if (!motor) return kRuntimeFailure;
-  if (auto installed = platform::install_motor_stop_signal_handlers(); !installed) {
-    fmt::print(stderr, "lever-fw: cannot install the signal handlers: {}\n", installed.error().message);
-    return kRuntimeFailure;
-  }
   auto can = opened(platform::BoardCanPort::open(can_config(config)), "CAN port");
   if (!can) return kRuntimeFailure;
   BoardHal hal{{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)}};
   fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",
              config.lever.role == protocol::Role::hsi ? "HSI" : "TOP", config.lever.pair, config.board.can_interface,
              hal.encoder_.description(), hal.motor_.description());
-  return config.lever.role == protocol::Role::hsi ? run_lever<fw::HsiRole>(config, hal, gauge, json_lines, stop)
-                                                  : run_lever<fw::TopRole>(config, hal, gauge, json_lines, stop);
+  return config.lever.role == protocol::Role::hsi
+             ? run_lever<fw::HsiRole>(config, hal, gauge, *guard, json_lines, stop)
+             : run_lever<fw::TopRole>(config, hal, gauge, *guard, json_lines, stop);
 }
 
 }  // namespace lever::app

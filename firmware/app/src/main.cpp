@@ -6,11 +6,13 @@
 #include <csignal>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "lever/app/board_runner.hpp"
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
+#include "lever/platform/motor_guard.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/parse.hpp"
 
@@ -26,6 +28,8 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The motor guard lever-fw starts beside itself (platform/motor_guard.hpp): not a user's command, so not in --help.
+  if (argc == 3 && std::string_view(argv[1]) == "--motor-guard") return platform::run_motor_guard(argv[2]);
   CLI::App app{"lever-fw: the firmware of one lever of the haptic teleoperation testbed (HSI or TOP)."};
   program::describe(app, "lever-fw");
   std::string config_path, can, motor_state;

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "lever/fw/hal.hpp"
+#include "lever/platform/motor_guard.hpp"
 #include "lever/platform/pwm_motor_config.hpp"
 #include "lever/platform/result.hpp"
 
@@ -59,13 +60,17 @@ class PwmMotor {
   // "pwmchip0/pwm1 20000 Hz enable_line=gpiochip1:3 ...", for the log line at start.
   const std::string& description() const noexcept;
 
-  // Writes duty 0 and disable to the PWM of every open motor in this process, and latches: their later
+  // The files and line request the motor guard keeps a copy of (motor_guard.hpp).
+  MotorGuardHandles guard_handles() const noexcept;
+  // Someone else (the motor guard) stopped this motor: every value is written again at the next command, none
+  // taken as already there.
+  void note_external_stop() noexcept;
+
+  // Deasserts the enable line and writes the PWM's stop to every open motor in this process, and latches: their later
   // commands are disabled ones. A command in progress on another thread (the loop's, on a multicore board) is
   // waited for first, at most 100 ms, so that none of its writes lands after the stop's and undoes it when the
   // process dies right after (a crash handler). Async-signal-safe: pwrite on files opened beforehand, atomics,
-  // clock_gettime and sched_yield. The enable
-  // lines are not touched here (a line is set with an ioctl through libgpiod, not a write); they go off at the
-  // next command(), or in the destructor. A disabled PWM at zero duty already means no torque.
+  // clock_gettime, sched_yield and the line's ioctl (its request is a file descriptor of this process).
   static void emergency_stop_all() noexcept;
 
  private:
