@@ -68,7 +68,13 @@ bool ServeLoop::run(const std::atomic<bool>& stop) {
     if (const int signal = g_gauge_signal.exchange(0, std::memory_order_relaxed)) {
       if (signal == SIGUSR1) top_.stop_gauge();
       if (signal == SIGUSR2 && !top_.start_gauge()) return false;
-      fmt::print(stderr, "lever-hil serve: the TOP's gauge {}\n", top_.gauge ? "serves again" : "stopped");
+      // Stamped once the server is closed and its thread joined, a reply in flight sent: the fault's own moment,
+      // from which a test times the TOP's response (serve, an ordinary process, takes the signal a tick or more
+      // after it was sent).
+      const auto stamp_ns =
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch());
+      fmt::print(stderr, "lever-hil serve: the TOP's gauge {} (CLOCK_MONOTONIC {} ns)\n",
+                 top_.gauge ? "serves again" : "stopped", stamp_ns.count());
     }
     watch_.poll(static_cast<std::int64_t>(tick_));
     const PairHeard heard = hear();

@@ -2,15 +2,16 @@
 # Runs on the reference board image (tools/board-image/boot, virtual time): the safety path under lever-fw@.service
 # as shipped, the pair at work (one site, armed), each fault timed to the TOP's safe state from its PWM
 # controller's own stamps (fault_timing_lib.sh), against a bound from the unit and the configuration:
-#   1. the TOP's loop hung (SIGSTOP): systemd's WatchdogSec fires (SIGABRT, then SIGCONT), the motor off within
-#      WatchdogSec + 50 ms (the feeder looks every quarter of it, docs/deploy.md); Restart=on-failure brings the
-#      lever back disarmed and unhomed;
-#   2. the TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables the PWM, which the kernel keeps as the
-#      dead writer left it, and the world holds the released enable line where it was (as most GPIO controllers
-#      do); bound: the unit's own budget for a lever whose loop no longer commands its motor, WatchdogSec + 50 ms,
-#      the same as for a hung loop (docs/deploy.md, "The reference board image", says why not lever_faults.sh's
-#      100 ms for a --motor-off started directly);
-#   3. a third crash within StartLimitIntervalSec: the unit stays failed, the motor off;
+#   0. a process spinning at the loops' SCHED_FIFO priority for 100 ms on the board's one CPU: neither loop nor
+#      PID 1 runs; each lever's motor guard, one priority above, stops its motor within its deadline + its check
+#      + 1 ms (platform/motor_guard.hpp);
+#   1. the TOP's loop hung (SIGSTOP): its motor guard stops the motor within the same bound; later systemd's
+#      WatchdogSec fires (SIGABRT, then SIGCONT) and Restart=on-failure brings the lever back disarmed and unhomed;
+#   2. the TOP killed (SIGKILL): its motor guard sees its pidfd and stops the motor within 2.4 ms (the process's
+#      end, the guard's wake, three writes: lever_faults.sh derives it); ExecStopPost's lever-fw --motor-off then
+#      runs and exits 0;
+#   3. the TOP's motor guard killed: the lever stops its motor in its SIGCHLD handler (1 ms) and exits 1; a third
+#      failure within StartLimitIntervalSec: the unit stays failed, the motor off;
 #   4. a configuration error (exit 2): not retried.
 # And systemd-analyze security of the running unit.
 # usage: safety_units.sh
@@ -25,6 +26,8 @@ timespan_ms() { systemd-analyze timespan "$1" | awk '$1 == "μs:" { print $2 / 1
 main_pid() { printf -v "${1}_pid" '%s' "$(unit_value "$1" MainPID)"; }
 # restarted ROLE PID: the unit runs again, with another main process than PID
 restarted() { [[ $(unit_value "$1" ActiveState) == active && $(unit_value "$1" MainPID) != "$2" && $(unit_value "$1" MainPID) != 0 ]]; }
+journal_has() { journalctl -u "lever-fw@$1" -o cat | grep -q "$2"; }  # journal_has ROLE TEXT
+stop_post_ok() { [[ $(unit_value "$1" ExecStopPost) == *"status=0/0"* ]]; }  # its last ExecStopPost exited 0
 wait_until() {  # wait_until SECONDS COMMAND...: until the command succeeds (guest time)
   local deadline=$((SECONDS + $1))
   shift
@@ -50,18 +53,37 @@ watchdog_ms=$(timespan_ms "$(unit_value top WatchdogUSec)")
 restart_s=$(($(timespan_ms "$(unit_value top RestartUSec)" | cut -d. -f1) / 1000))
 echo "from the unit: WatchdogSec $watchdog_ms ms, RestartSec $restart_s s, StartLimitBurst $(unit_value top StartLimitBurst)"
 mono_offset
+# The motor guard's figures (platform/motor_guard.hpp's defaults, lever-fw's log line says them)
+guard_deadline_ms=10 guard_check_ms=2
+guard_ms=$((guard_deadline_ms + guard_check_ms + 1))
+check "the TOP's guard runs with them: $(journalctl -u lever-fw@top -o cat | grep -m1 'motor guard pid')" \
+  journal_has top "motor guard pid [0-9]*: deadline $guard_deadline_ms ms, checked every $guard_check_ms ms, SCHED_FIFO 81"
+
+# 0. A process spinning at the loops' own priority on the one CPU, 100 ms by its own clock.
+poll_rt on
+check "before the spin: both motors on" eval 'motor_on hsi && motor_on top'
+chrt -f 80 bash -c 'echo "${EPOCHREALTIME/./}" >"$1"; end=$((${EPOCHREALTIME/./} + 100000))
+  while ((${EPOCHREALTIME/./} < end)); do :; done' spin "$out/spin.start"
+read -r t0 <"$out/spin.start"
+time_to "a FIFO 80 process spins 100 ms: the HSI's guard stops its motor" 0 "$guard_ms" "$t0" motor_off hsi
+time_to "a FIFO 80 process spins 100 ms: the TOP's guard stops its motor" 0 "$guard_ms" "$t0" motor_off top
+poll_rt off
+check "and the TOP's guard says so" wait_until 10 journal_has top "loop has not stepped for"
+if [[ $(last_stat top '.faults | index("encoder") != null') == true ||
+  $(last_stat hsi '.faults | index("encoder") != null') == true ]]; then
+  rehome "the spin, a count lost"
+else
+  rearm "after the spin"
+fi
 
 # 1. The loop hung: the process stopped, as a loop stuck in a step would look to the feeder.
 pid=$top_pid
 poll_rt on
+check "before SIGSTOP: the TOP's motor on" motor_on top
 clock_now
 t0=$now
 kill -STOP "$top_pid"
-# The unit's budget for a lever whose loop no longer commands its motor: hung (the feeder looks every quarter of
-# WatchdogSec) or killed (systemd runs ExecStopPost at once).
-uncommanded_ms=$(awk -v w="$watchdog_ms" 'BEGIN { print w + 50 }')
-time_to "TOP's loop hung (SIGSTOP): systemd's watchdog, motor off" 0 "$uncommanded_ms" \
-  "$t0" motor_off top
+time_to "TOP's loop hung (SIGSTOP): its motor guard, motor off" 0 "$guard_ms" "$t0" motor_off top
 poll_rt off
 applied_since top "$t0"
 check "systemd said the watchdog fired" wait_until 10 grep -q "Watchdog timeout" <(journalctl -u lever-fw@top -o cat)
@@ -71,18 +93,16 @@ require "and comes back disarmed and unhomed" wait_for 60 top '.state == "disarm
 check "restarts so far: 1 ($(unit_value top NRestarts))" test "$(unit_value top NRestarts)" = 1
 rehome "restarted after the watchdog"
 
-# 2. SIGKILL: nothing of lever-fw runs; the PWM keeps its duty until ExecStopPost's lever-fw --motor-off.
+# 2. SIGKILL: nothing of lever-fw runs; its motor guard holds the enable line's request and the PWM's files.
 pid=$top_pid
 poll_rt on
+check "before SIGKILL: the TOP's motor on" motor_on top
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-# The kernel releases the dead process's lines, and the world holds the enable line where it was (as most GPIO
-# controllers keep a released output); the PWM keeps its duty: the motor runs until ExecStopPost's lever-fw
-# --motor-off disables it.
-time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off, motor off" 0 "$uncommanded_ms" "$t0" motor_off top
-time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
+time_to "TOP killed (SIGKILL): its motor guard, motor off" 0 2.4 "$t0" motor_off top
 poll_rt off
+check "ExecStopPost's lever-fw --motor-off ran and exited 0" wait_until 10 stop_post_ok top
 applied_since top "$t0"
 require "Restart=on-failure: lever-fw@top runs again" wait_until $((restart_s + 30)) restarted top "$pid"
 main_pid top
@@ -90,14 +110,18 @@ require "and comes back disarmed and unhomed" wait_for 60 top '.state == "disarm
 check "restarts so far: 2 ($(unit_value top NRestarts))" test "$(unit_value top NRestarts)" = 2
 rehome "restarted after SIGKILL"
 
-# 3. The third crash within StartLimitIntervalSec: no fourth start.
+# 3. The TOP's motor guard killed, the third failure within StartLimitIntervalSec: no fourth start.
+guard_pid=''
+read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
+require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
 poll_rt on
+check "before its guard is killed: the TOP's motor on" motor_on top
 clock_now
 t0=$now
-kill -KILL "$top_pid"
-time_to "TOP killed a third time: motor off" 0 "$uncommanded_ms" "$t0" motor_off top
-time_to "TOP killed a third time: ExecStopPost disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
+kill -KILL "$guard_pid"
+time_to "TOP's motor guard killed: the TOP stops its motor itself" 0 1 "$t0" motor_off top
 poll_rt off
+check "and says why" wait_until 10 journal_has top "the motor guard (pid $guard_pid) ended"
 sleep $((restart_s + 5))
 # systemd keeps the last failure's Result (signal) and says why it refused the fourth start in the journal.
 check "after three crashes the unit stays failed ($(unit_value top ActiveState), no main process: $(unit_value top MainPID))" \

@@ -1,8 +1,6 @@
 # Sourced by the tests that time a fault to a lever's safe state from its PWM controller's own stamps (the kernel
 # rig's lever_faults.sh, the board image's tests/image/safety_units.sh), after lever_sites_lib.sh.
 
-# key ROLE SECTION KEY: a figure of the lever's configuration ($work/ROLE.toml), which the bounds come from
-key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
 # clock_now: the guest's clock into $now, in microseconds: bash's own $EPOCHREALTIME, read without a fork or a
 # file (a fork costs milliseconds of guest time and a read of /proc/timer_list near one, all of it counted). In
 # virtual time (-rtc clock=vm) the guest's realtime clock runs with its monotonic one.
@@ -113,3 +111,8 @@ rehome() {
   require "the TOP homes again ($1)" wait_for 120 top '.position_valid'
   rearm "$1, homed"
 }
+
+# motor_on ROLE: the lever drives its motor at this moment: its driver's enable line (MOTOR_EN, line 2) high, which
+# PwmMotor raises only while it commands torque. Checked just before each fault, so that a lever already safe
+# (disarmed, faulted) cannot pass a time-to-safe check it never had to meet.
+motor_on() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 1 ]]; }

@@ -68,14 +68,20 @@ check "TOP stopped for $(ms_since 0 "$stopped_us") ms: no TIMING, the TOP stays 
   wait_after 5 top "$mark" '.state == "armed" and (.faults | index("timing") == null)'
 # Above it: TIMING at the first step, and the motor off. A lever moving while its process is stopped may also
 # overflow the kernel's 16-event FIFO of an encoder line (the v1 GPIO interface's, fixed): its count is lost, it
-# latches ENCODER as well, and only homing again makes it whole.
+# latches ENCODER as well, and only homing again makes it whole. A stop longer than the motor guard's deadline is cut
+# by the guard first (platform/motor_guard.hpp: no step for guard_deadline_ms, found at its next check, every
+# guard_check_ms; then a wake at SCHED_FIFO above every other thread and three writes, within 1 ms): the bound is
+# the sooner of the two.
+guard_deadline_ms=10 guard_check_ms=2
 for stop_ms in 4 20 50; do
   poll_rt on
+  check "before the ${stop_ms} ms stop: the TOP's motor on" motor_on top
   stop_top "0.0$(printf '%02d' "$stop_ms")"
   stop=$(ms_since 0 "$stopped_us")
   require "a stop longer than fault_after_ms: $stop ms" awk -v s="$stop" -v b="$fault_after_ms" 'BEGIN { exit !(s > b) }'
-  time_to "TOP stopped for $stop ms: its motor off" 0 "$(awk -v s="$stop" 'BEGIN { printf "%.1f", s + 2 }')" "$t0" \
-    motor_off top
+  time_to "TOP stopped for $stop ms: its motor off" 0 \
+    "$(awk -v s="$stop" -v g=$((guard_deadline_ms + guard_check_ms + 1)) 'BEGIN { b = s + 2; if (g < b) b = g; printf "%.1f", b }')" \
+    "$t0" motor_off top
   poll_rt off
   applied_since top "$t0"
   check "and latches TIMING" wait_for 5 top '.faults | index("timing") != null'
@@ -91,6 +97,7 @@ done
 # where it was for safe_hold_ms, then lets go (so its motor stops no sooner than that).
 hold_ms=$(key top safety safe_hold_ms)
 poll_rt on
+check "before vcan0 down: both motors on" eval 'motor_on hsi && motor_on top'
 clock_now
 t0=$now
 ip link set vcan0 down
@@ -103,12 +110,23 @@ check "vcan0 down: the HSI latched COMMS" wait_for 5 hsi '.faults | index("comms
 check "vcan0 down: the TOP latched COMMS" wait_for 5 top '.faults | index("comms_timeout") != null'
 rearm "vcan0 down and up"
 
-# 3. The gauge's amplifier gone (serve closes its Modbus server) and back: the TOP's force goes stale.
+# 3. The gauge's amplifier gone (serve closes its Modbus server) and back: the TOP's force goes stale. The fault's
+# moment is serve's own stamp of the server closed (its thread joined, so a reply in flight has been sent): serve is
+# an ordinary process and takes the signal a tick or more after kill sent it, which is not the TOP's time. The
+# bound, from that stamp, term by term (top.toml's figures, 1 ms ticks):
+#   the last good sample arrived at or before the stamp;
+#   + stale_ms + 1: stale once a sample is older than stale_ms whole ticks (strain_gauge.hpp: now - last > stale);
+#   + 1: its age is floored to whole ticks (gauge_port.hpp), so its tick is rounded up by up to one;
+#   + hold_ms: the TOP holds that long from the tick it latched FORCE_STALE, then commands zero torque;
+#   + 1: that step's wake lateness and its PWM write, before the controller stamps the state, within a period.
+# No sooner than hold_ms: a sample is at most poll_us + timeout_us (15 ms) older than the stamp, well inside stale_ms.
 poll_rt on
-clock_now
-t0=$now
+check "before the gauge server goes: the TOP's motor on" motor_on top
 kill -USR1 "$serve_pid"
-time_to "gauge server gone: the TOP holds, then its motor off" "$hold_ms" $((stale_ms + hold_ms + 2 * tick_ms)) "$t0" \
+require "serve stopped the gauge" wait_for_serve faults "gauge stopped (CLOCK_MONOTONIC"
+closed_ns=$(sed -n 's/.*gauge stopped (CLOCK_MONOTONIC \([0-9]*\) ns).*/\1/p' "$out/faults.serve" | tail -n 1)
+t0=$((closed_ns / 1000 - offset_us))
+time_to "gauge server gone: the TOP holds, then its motor off" "$hold_ms" $((stale_ms + 1 + 1 + hold_ms + 1)) "$t0" \
   motor_off top
 poll_rt off
 check "gauge server gone: the TOP latched FORCE_STALE" wait_for 5 top '.faults | index("force_stale") != null'
@@ -117,22 +135,26 @@ require "the gauge serves again" wait_for_serve faults "gauge serves again"
 sleep 0.5
 rearm "gauge server back"
 
-# 4. The TOP killed: nothing of it runs any more; its motor keeps its last duty, and its driver's enable line its
-# last level (serve's world holds a released line, as most GPIO controllers do: hil/devices motor_readback.hpp),
-# until the service manager's ExecStopPost (lever-fw --motor-off) stops it. Its configuration was cut in half
-# while it ran (an edit, a full disk; here the cut falls in a comment, so the rest is valid TOML whose motor keys
-# are the defaults: the HSI's PWM chip): --motor-off stops the motor the lever's motor state names (--motor-state,
-# written at its start), not the configuration's. The HSI hears the TOP fall silent.
+# 4. The TOP killed: nothing of it runs any more. Its motor guard, which holds the enable line's request and the
+# PWM's files, sees its pidfd and stops the motor. Bound, term by term: the kernel ends the process (its threads,
+# its memory of a few MB, locked, and its files) before the pidfd is readable: 2 ms; the guard, at SCHED_FIFO
+# above the loops, wakes at once on this one CPU: 0.1 ms; the line's ioctl and the two PWM writes, the last one
+# stamped by the controller: 0.3 ms. Then, as the service manager's ExecStopPost does, lever-fw --motor-off stops
+# it again: its configuration was cut in half while it ran (an edit, a full disk; here the cut falls in a comment,
+# so the rest is valid TOML whose motor keys are the defaults: the HSI's PWM chip): --motor-off stops the motor the
+# lever's motor state names (--motor-state, written at its start), not the configuration's. The HSI hears the TOP
+# fall silent.
 cp "$work/top.toml" "$work/top.toml.whole"
 head -c "$(($(wc -c <"$work/top.toml") / 2))" "$work/top.toml.whole" >"$work/top.toml"
 poll_rt on
+check "before SIGKILL: both motors on" eval 'motor_on hsi && motor_on top'
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-wait "$top_pid" 2>/dev/null  # reaped, its lines released: systemd runs ExecStopPost after that
+time_to "TOP killed: its guard stops its motor" 0 2.4 "$t0" motor_off top
+wait "$top_pid" 2>/dev/null  # reaped: systemd runs ExecStopPost after that
 lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
 motor_off_code=$?
-time_to "TOP killed, then lever-fw --motor-off: TOP motor off" 0 100 "$t0" motor_off top
 time_to "TOP killed: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
 poll_rt off
 check "lever-fw --motor-off on a configuration cut in half: exit 0 (got $motor_off_code)" test "$motor_off_code" -eq 0
@@ -145,12 +167,58 @@ restart_top() {  # restart_top WHY: a new TOP process, homed, and the pair re-ar
 }
 restart_top "after SIGKILL"
 
+# 4b. The TOP's motor guard killed: the lever hears it end (SIGCHLD), stops its motor in the handler (the enable
+# line's ioctl and the PWM's writes) and exits 1, for the service manager to start it again with a new guard.
+# Bound: the guard's exit (a small process): 0.5 ms; SIGCHLD delivered to lever-fw and its handler run: 0.2 ms; the
+# writes: 0.3 ms.
+guard_pid=''
+read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
+require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
+poll_rt on
+check "before its guard is killed: the TOP's motor on" motor_on top
+clock_now
+t0=$now
+kill -KILL "$guard_pid"
+time_to "TOP's guard killed: the TOP stops its motor" 0 1 "$t0" motor_off top
+poll_rt off
+wait "$top_pid" 2>/dev/null
+top_code=$?
+check "and the TOP exits 1 (got $top_code)" test "$top_code" -eq 1
+check "and says why" has_text "$out/top.err" "the motor guard (pid $guard_pid) ended"
+restart_top "after its guard was killed"
+
+# 4c. A loop spinning at its real-time priority on this one CPU: a process at SCHED_FIFO 80, the loops' own
+# priority, spins for 100 ms; neither loop steps, nor serve, nor this shell, nor PID 1. The guards, one priority
+# above, still run: each stops its motor within its deadline, found at its next check, and 1 ms (as for a stop).
+# Read afterwards from the controllers' stamps.
+poll_rt on
+check "before the spin: both motors on" eval 'motor_on hsi && motor_on top'
+chrt -f 80 bash -c 'echo "${EPOCHREALTIME/./}" >"$1"; end=$((${EPOCHREALTIME/./} + 100000))
+  while ((${EPOCHREALTIME/./} < end)); do :; done' spin "$out/spin.start"
+read -r t0 <"$out/spin.start"
+time_to "a FIFO 80 process spins 100 ms: the HSI's guard stops its motor" 0 \
+  $((guard_deadline_ms + guard_check_ms + 1)) "$t0" motor_off hsi
+time_to "a FIFO 80 process spins 100 ms: the TOP's guard stops its motor" 0 \
+  $((guard_deadline_ms + guard_check_ms + 1)) "$t0" motor_off top
+poll_rt off
+check "and the HSI's guard says so" has_text "$out/hsi.err" "loop has not stepped for"
+check "and the TOP's guard says so" has_text "$out/top.err" "loop has not stepped for"
+check "and the TOP latched TIMING" wait_for 5 top '.faults | index("timing") != null'
+check "and the HSI latched TIMING" wait_for 5 hsi '.faults | index("timing") != null'
+if [[ $(last_stat top '.faults | index("encoder") != null') == true ||
+  $(last_stat hsi '.faults | index("encoder") != null') == true ]]; then
+  rehome "the spin, a count lost"
+else
+  rearm "after the spin"
+fi
+
 # 5. The TOP's PWM channel unexported under lever-fw: its writes fail; the controller itself runs on at its last
 # state, so the safe state is the driver's enable line going low, which PwmMotor does in the command whose write
 # failed. It writes a changed duty at once and an unchanged one every PwmMotor::kConfirmEvery (10) commands (a
 # TOP at rest against the wall holds one duty): so within 10 periods of the unexport, and one more for its phase.
 # Here the TOP is at work and its duty changes within that too; lever_unexport_at_rest.sh is the case at rest.
 poll_rt on
+check "before the unexport: the TOP's motor on" motor_on top
 clock_now
 before=$now
 echo 0 >/sys/class/pwm/pwmchip"$(pwm_chip top)"/unexport
@@ -167,6 +235,7 @@ restart_top "after the unexport: it exports the channel again"
 
 # 6. The HSI's gpio-sim chip removed: its encoder and driver lines are gone.
 poll_rt on
+check "before its chip goes: the HSI's motor on" motor_on hsi
 clock_now
 t0=$now
 echo 0 >/sys/kernel/config/gpio-sim/hsi/live

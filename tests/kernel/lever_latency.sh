@@ -43,7 +43,6 @@ r() { jq -r "$1" "$report"; }
 # one site: one direction acts in the same millisecond, the other in the next, so 3 periods plus both steps; through
 # two bridges each direction waits for the next millisecond, so 4 periods plus both steps. A lever that acted a
 # whole period late in either direction fails the sum; one acting a period late where it should act at once, each.
-key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
 period_ms=1
 top_step_ms=$(awk -v us="$(key top timing long_step_us)" 'BEGIN { print us / 1000 }')
 hsi_step_ms=$(awk -v us="$(key hsi timing long_step_us)" 'BEGIN { print us / 1000 }')

@@ -88,15 +88,19 @@ write_config() {
   diff "$examples/$role.toml" "$file" | sed -n 's/^> /  /p'
 }
 
+# key ROLE SECTION KEY: a figure of the lever's configuration ($work/ROLE.toml), which the bounds come from
+key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
+
 # one_site NAME SERVE_ARGS...: both levers on one bus (the TOP's gauge on Modbus TCP), candump logging the HSI's
 # interface to $out/NAME.candump, serve started, then both lever-fw. The bus is vcan0 for both, or with
 # site_bus=kvaser the emulated SJA1000 controllers of run-in-guest --kvaser, on one emulated bus: the HSI on can0,
-# the TOP on can1.
+# the TOP on can1. Extra config keys for the HSI in $one_site_hsi_keys (SECTION KEY VALUE...).
 site_bus=vcan
+one_site_hsi_keys=()
 one_site() {
   local name=$1; shift
   lever_chip hsi && lever_chip top && pwm_chips || exit 1
-  write_config hsi "$(site_can hsi)"
+  write_config hsi "$(site_can hsi)" "${one_site_hsi_keys[@]}"
   write_config top "$(site_can top)"
   candump -r 8388608 -L "$(site_can hsi)" >"$out/$name.candump" &
   pids+=("$!")

@@ -96,29 +96,46 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 # Tracking while the operator moves, judged from serve's trace on the ticks both levers have been armed for
 # 0.5 s or more (a re-armed TOP first catches up with an HSI that moved on meanwhile). The TOP's reference is the
 # HSI's position one link earlier: 20 ms of netem and up to one 1 ms period until the TOP's loop reads the
-# frame, so the error is the TOP's angle less the HSI's 21 ms before. The bound is lever_one_site.sh's: the TOP's
-# position loop (40 N m/rad) saturates at its 1 N m limit 25 mrad away from its reference. The operator must have
-# moved: free-motion reaches over 0.1-0.3 rad in 0.3-1 s (docs/hil-model.md), at rest it would prove nothing.
-read -r ticks rms travel speed < <(awk -F, -v delay=21 -v settle=500 '
+# frame, so the error is the TOP's angle less the HSI's 21 ms before. The operator must have moved: free-motion
+# reaches over 0.1-0.3 rad in 0.3-1 s (docs/hil-model.md), at rest it would prove nothing.
+# The bound, from the TOP's loop at the operator's speed (its rms v and acceleration a from the same ticks), term by
+# term. The loop: torque = kp (r - x) - kd x' + kff r' on the lever (inertia J, viscous b, Coulomb Fc: the HIL's
+# lever, docs/hil-model.md); following a reference moving at v it lags by ((kd - kff + b) v + Fc + J a) / kp, whose
+# rms is at most ((kd - kff + b) v_rms + Fc + J a_rms) / kp. The reference itself: its frame read up to one period
+# (1 ms) after the 21 ms taken off, v_rms x 1 ms; and the motion deadband holds the velocity within p |v| + floor of
+# the HSI's between frames, each frame carrying the position, so the reference drifts by at most (p v_rms + floor)
+# times the mean interval between the HSI's motion frames (over the whole run, rest included: longer than while
+# moving). Before, the bound was the loop's saturation, 25 mrad, about 20 times the 1.2-1.3 mrad measured.
+read -r ticks rms travel speed accel < <(awk -F, -v delay=21 -v settle=500 '
   BEGIN { since = -1 }
   NR == 1 { next }
   {
-    ms = int($1 * 1000 + 0.5); hsi[ms] = $2
+    ms = int($1 * 1000 + 0.5); hsi[ms] = $2; vel[ms] = $4
     if (!($14 == 2 && $15 == 2)) { since = -1; next }
     if (since < 0) since = ms
-    if (ms - since < settle || !((ms - delay) in hsi)) next
-    e = $3 - hsi[ms - delay]; n++; sq += e * e; v2 += $4 * $4
+    if (ms - since < settle || !((ms - delay) in hsi) || !((ms - 1) in vel)) next
+    e = $3 - hsi[ms - delay]; n++; sq += e * e; v2 += $4 * $4; a = ($4 - vel[ms - 1]) * 1000; a2 += a * a
     if (n == 1 || $2 < lo) lo = $2
     if (n == 1 || $2 > hi) hi = $2
   }
-  END { if (n == 0) print 0, "nan", 0, 0; else printf "%d %.5f %.4f %.4f\n", n, sqrt(sq / n), hi - lo, sqrt(v2 / n) }' \
+  END { if (n == 0) print 0, "nan", 0, 0, 0; else printf "%d %.5f %.4f %.4f %.3f\n", n, sqrt(sq / n), hi - lo, sqrt(v2 / n), sqrt(a2 / n) }' \
   "$out/two-sites.trace.csv")
-echo "tracking: $ticks ticks judged, rms error $rms rad against the HSI 21 ms earlier, HSI travel $travel rad, rms speed $speed rad/s; the report's rms error (no delay): $(r .position_rmse) rad"
+echo "tracking: $ticks ticks judged, rms error $rms rad against the HSI 21 ms earlier, HSI travel $travel rad, rms speed $speed rad/s, rms acceleration $accel rad/s2; the report's rms error (no delay): $(r .position_rmse) rad"
 check "the operator moved the HSI while both were armed: $travel rad of travel, $speed rad/s rms over $ticks ticks" \
   awk -v t="$travel" -v v="$speed" -v n="$ticks" 'BEGIN { exit !(n >= 3000 && t > 0.1 && v > 0.05) }'
-check "the TOP tracks the HSI over the link: rms error $rms rad < 0.025 against the HSI's position 21 ms earlier" \
-  awk -v e="$rms" 'BEGIN { exit !(e == e + 0 && e < 0.025) }'
 "$dbc_decode" --summary "$dbc" "$out/two-sites-hsi.candump" >"$work/decoded"; code=$?
+motion_frames=$(jq '.messages.LeverMotion.frames // 0' "$work/decoded")
+session_s=$(awk 'NR == 1 { gsub(/[()]/, "", $1); t0 = $1 } { gsub(/[()]/, "", $1); t = $1 } END { print t - t0 }' \
+  "$out/two-sites-hsi.candump")
+bound=$(awk -v kp="$(key top control.position kp_nm_per_rad)" -v kd="$(key top control.position kd_nms)" \
+  -v kff="$(key top control.position kff_nms)" -v p="$(key hsi codec.motion p)" -v floor="$(key hsi codec.motion floor)" \
+  -v J=2e-3 -v b=0.01 -v Fc=0.01 -v v="$speed" -v a="$accel" -v frames="$motion_frames" -v s="$session_s" '
+  BEGIN { lag = ((kd - kff + b) * v + Fc + J * a) / kp; read = v * 0.001; drift = (p * v + floor) * s / frames
+          printf "%.5f %.5f %.5f %.5f\n", lag + read + drift, lag, read, drift }')
+read -r bound lag_term read_term drift_term <<<"$bound"
+echo "tracking bound: $bound rad = loop lag $lag_term + frame read $read_term + deadband drift $drift_term ($motion_frames motion frames in $session_s s)"
+check "the TOP tracks the HSI over the link: rms error $rms rad <= $bound against the HSI's position 21 ms earlier" \
+  awk -v e="$rms" -v b="$bound" 'BEGIN { exit !(e == e + 0 && b == b + 0 && e <= b) }'
 jq -c '.messages | map_values(.frames)' "$work/decoded"
 check "every frame on the HSI's bus decodes by the DBC, the TOP's relayed ones too (exit $code)" test "$code" -eq 0
 check "the TOP's energy frames crossed the link to the HSI's bus" \

@@ -4,9 +4,11 @@
 # work, whose duty changes every period, so any write fails at once and any code notices; at rest only PwmMotor's
 # confirming write (an unchanged duty written again every PwmMotor::kConfirmEvery commands) meets the gone channel,
 # and its release takes the driver's enable line low. Code that writes only a changed duty notices at the next
-# change, or never. The operator keeps hands off (serve --hands-off): the HSI rests, its motor showing the TOP's
-# gauge at rest, a duty that moves by one step now and then; the TOP hunts between two encoder counts, its duty
-# changing every few periods, so it is the HSI's channel that goes.
+# change, or never. The operator keeps hands off (serve --hands-off): the HSI rests, armed, its driver enabled. Its
+# display gain is 0 (control.display.gain), so it commands exactly zero torque, duty 0, for as long as it rests:
+# shown the TOP's gauge at rest instead, its duty moved by one step now and then, and in 2-11 % of runs inside the
+# window below, where a lever without the confirming write passed too. The TOP hunts between two encoder counts,
+# its duty changing every few periods, so it is the HSI's channel that goes.
 # usage: lever_unexport_at_rest.sh BIN_DIR
 set -uo pipefail
 . "$(dirname "$0")/lib.sh"
@@ -15,6 +17,7 @@ set -uo pipefail
 . "$(dirname "$0")/fault_timing_lib.sh"
 trap stop_all EXIT
 
+one_site_hsi_keys=(control.display gain 0.0)
 one_site at-rest --duration 0 --json --hands-off
 up_and_homed
 require "lever-ctl arm: both armed" lever_ctl vcan0 arm
