@@ -148,6 +148,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
         }
       },
       stop.get_token());
+  guard.loop_ended();  // what follows takes longer than its deadline, and is not the loop
   printer.request_stop();
   hal.motor_.command({0.0, false});  // the safe state before the objects go (their destructors stop it again)
   watchdog.value().stop();

@@ -55,8 +55,10 @@ class MotorGuard {
   MotorGuard& operator=(MotorGuard&&) = delete;
   MotorGuard(const MotorGuard&) = delete;
   MotorGuard& operator=(const MotorGuard&) = delete;
-  // The loop ended on purpose; the guard stops the motor again once this process has exited, and ends.
+  // The loop has ended on purpose (loop_ended(), or this destructor): no deadline any more; the guard stops the motor
+  // again once this process has exited, and ends.
   ~MotorGuard();
+  void loop_ended() noexcept { shared_->loop_ended.store(true); }
 
   // After each step the loop completed (its clock's reading at the step): one atomic store.
   void stepped(std::int64_t monotonic_ns) noexcept { shared_->last_step_ns.store(monotonic_ns); }
