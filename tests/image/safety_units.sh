@@ -62,11 +62,7 @@ check "the TOP's guard runs with them: $(journalctl -u lever-fw@top -o cat | gre
 # 0. A process spinning at the loops' own priority on the one CPU, 100 ms by its own clock.
 poll_rt on
 check "before the spin: both motors on" eval 'motor_on hsi && motor_on top'
-chrt -f 80 bash -c 'echo "${EPOCHREALTIME/./}" >"$1"; end=$((${EPOCHREALTIME/./} + 100000))
-  while ((${EPOCHREALTIME/./} < end)); do :; done' spin "$out/spin.start"
-read -r t0 <"$out/spin.start"
-time_to "a FIFO 80 process spins 100 ms: the HSI's guard stops its motor" 0 "$guard_ms" "$t0" motor_off hsi
-time_to "a FIFO 80 process spins 100 ms: the TOP's guard stops its motor" 0 "$guard_ms" "$t0" motor_off top
+spin_and_time "a FIFO 80 process spins 100 ms: its guard" "$guard_ms"
 poll_rt off
 check "and the TOP's guard says so" wait_until 10 journal_has top "loop has not stepped for"
 if [[ $(last_stat top '.faults | index("encoder") != null') == true ||

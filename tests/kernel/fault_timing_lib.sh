@@ -116,3 +116,42 @@ rehome() {
 # PwmMotor raises only while it commands torque. Checked just before each fault, so that a lever already safe
 # (disarmed, faulted) cannot pass a time-to-safe check it never had to meet.
 motor_on() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 1 ]]; }
+
+# spin_and_time NAME MAX_MS: a process at SCHED_FIFO 80, the loops' own priority, spins 100 ms by its own clock on
+# this one CPU, while this shell, at SCHED_FIFO 99 above everything, polls both levers' motors every 0.2 ms (a few
+# tens of microseconds each, so the guards at 81 lose no more than that). Each lever's time to motor_off counts from
+# the spin's own first instruction (the time it writes before it spins): its controller's stamp where the stop
+# changed the PWM's state, else the poll that saw it; each against MAX_MS. The shell goes back to FIFO 50 after.
+spin_and_time() {
+  local name=$1 max=$2 seen_hsi='' seen_top='' deadline spin_t0 role
+  chrt -f -p 99 $$ >/dev/null
+  rm -f "$out/spin.start"
+  chrt -f 80 bash -c 'echo "${EPOCHREALTIME/./}" >"$1"; end=$((${EPOCHREALTIME/./} + 100000))
+    while ((${EPOCHREALTIME/./} < end)); do :; done' spin "$out/spin.start" &
+  local spinner=$!
+  clock_now
+  deadline=$((now + 5000000))
+  while [[ -z $seen_hsi || -z $seen_top ]] && ((now < deadline)); do
+    read -rt 0.0002 -u "$never_ready" || :
+    clock_now
+    [[ -z $seen_hsi ]] && motor_off hsi && seen_hsi=$now
+    [[ -z $seen_top ]] && motor_off top && seen_top=$now
+  done
+  wait "$spinner"
+  chrt -f -p 50 $$ >/dev/null
+  read -r spin_t0 <"$out/spin.start"
+  for role in hsi top; do
+    local seen=seen_$role how=polled ms
+    if [[ -z ${!seen} ]]; then
+      check "$name: the $role's motor off: not reached within 5 s (bound $max ms)" false
+      continue
+    fi
+    now=${!seen}
+    off_stamp "$role" "$spin_t0"
+    [[ -n $stamp ]] && ((stamp <= now)) && now=$stamp how="the controller's stamp"
+    ms=$(ms_since "$spin_t0" "$now")
+    check "$name: the $role's motor off: $ms ms, $how (bound <= $max ms)" \
+      awk -v m="$ms" -v hi="$max" 'BEGIN { exit !(m >= 0 && m <= hi) }'
+    fault_rows+=("| $name: the $role's motor | <= $max | $ms | $how |")
+  done
+}

@@ -51,6 +51,8 @@ echo "the HSI's controller before the unexport: $held_state; the unexport took $
 time_to "HSI at rest, its PWM unexported: its driver disabled (enable line low)" 0 $(((10 + 1) * tick_ms)) "$t0" \
   enable_low hsi
 poll_rt off
+echo "the HSI's status after it: $(last_line "$out/hsi.stats" | jq -c '{state, faults, torque_nm, overruns, worst_step_interval_ms, worst_step_us}' 2>/dev/null)"
+tail -n 4 "$out/hsi.err"
 check "and the HSI latched MOTOR_DRIVER" wait_for 5 hsi '.faults | index("motor_driver") != null'
 echo "the HSI's controller after the unexport (it runs on at its last state): $(pwm_hw hsi)"
 finish "the HSI at rest, its PWM channel unexported"
