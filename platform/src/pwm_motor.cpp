@@ -93,11 +93,16 @@ void PwmMotor::command(const fw::MotorCommand& command) noexcept {
   const DutySetpoint setpoint = enable ? m.map(command.torque_nm) : DutySetpoint{};
   // Only changed values are written, so a lever at rest writes nothing and would not notice its PWM channel
   // gone (unexported, its driver unbound) until the duty changed; every kConfirmEvery-th command writes it.
+  // The enable is confirmed by reading it back: it is written only when it changes, and another process may
+  // write it (another instance's --motor-off). One that differs from this lever's last write counts as a failed
+  // write: the motor is released in this command, not driven first, and driver_fault() reports it.
+  bool enable_held = true;
   if (++m.commands_since_confirm >= kConfirmEvery) {
     m.commands_since_confirm = 0;
     m.pwm.confirm_duty_next();
+    enable_held = m.pwm.enable_as_written();
   }
-  bool ok = enable ? m.drive(setpoint) : m.release();
+  bool ok = (enable && enable_held ? m.drive(setpoint) : m.release()) && enable_held;
   // A duty that could not be written is not driven: the driver goes off in this call, a period before the core
   // would see driver_fault() and latch motor_driver, and never stays enabled behind a PWM in an unknown state.
   bool driven = enable && ok;

@@ -22,12 +22,12 @@ bool exists(const std::string& path) { return ::access(path.c_str(), F_OK) == 0;
 
 // Non-blocking: a FIFO where an attribute should be (a test tree, a wrong sysfs_root) must not hang the open;
 // pwrite on it then fails (ESPIPE) like any write that does not take.
-UniqueFd open_for_write(const std::string& path) {
-  return UniqueFd(::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC));
+UniqueFd open_for_write(const std::string& path, int access = O_WRONLY) {
+  return UniqueFd(::open(path.c_str(), access | O_NONBLOCK | O_NOCTTY | O_CLOEXEC));
 }
 
 // The decimal an attribute holds (its first line: a test's regular file may keep the tail of a longer value).
-std::optional<std::uint64_t> read_decimal(int fd) {
+std::optional<std::uint64_t> read_decimal(int fd) noexcept {
   char buffer[32];
   const ssize_t got = ::pread(fd, buffer, sizeof buffer, 0);
   if (got <= 0) return std::nullopt;
@@ -84,7 +84,7 @@ Result<SysfsPwm> SysfsPwm::open(const PwmMotorConfig& config) {
                  EACCES};
   }
 
-  UniqueFd enable = open_for_write(dir + "/enable");
+  UniqueFd enable = open_for_write(dir + "/enable", O_RDWR);  // read back by enable_as_written()
   UniqueFd duty = open_for_write(dir + "/duty_cycle");
   UniqueFd period(::open((dir + "/period").c_str(), O_RDWR | O_CLOEXEC));
   UniqueFd polarity = open_for_write(dir + "/polarity");
@@ -142,6 +142,14 @@ bool SysfsPwm::set_enabled(bool enabled) noexcept {
   }
   enabled_written_ = enabled;
   return true;
+}
+
+bool SysfsPwm::enable_as_written() noexcept {
+  if (!enabled_written_) return true;
+  const std::optional<std::uint64_t> in_force = read_decimal(enable_.get());
+  if (in_force && *in_force == (*enabled_written_ ? 1u : 0u)) return true;
+  enabled_written_.reset();
+  return false;
 }
 
 void SysfsPwm::stop() noexcept {

@@ -30,6 +30,11 @@ class SysfsPwm {
     duty_written_.reset();
     enabled_written_.reset();
   }
+  // The enable attribute read back (one pread, no allocation) against the value last written: another process
+  // may write it (another instance's --motor-off), and the write-once cache would never see it. False when it
+  // differs or cannot be read; the value last written is then forgotten, as after a failed write, so that the
+  // next set_enabled writes again. True when no value is known to compare with.
+  bool enable_as_written() noexcept;
   // Duty 0 then disabled, written whatever was written before.
   void stop() noexcept;
 

@@ -245,6 +245,51 @@ TEST_CASE("PwmMotor: an unchanged duty is written again every kConfirmEvery comm
   CHECK(tree.read("enable") == "1");
 }
 
+// Another process writing the enable (another instance's --motor-off naming this lever's channel) changes
+// nothing this lever writes, so only a read-back sees it. What the lever writes at rest is not assumed here: the
+// foreign write is the other value than the one it last wrote.
+TEST_CASE("PwmMotor: a foreign write of the enable is seen within kConfirmEvery commands and reported as a driver "
+          "fault",
+          "[motor]") {
+  PwmSysfsTree tree(kChip, kChannel);
+  PwmMotor motor = open_or_fail(config_for(tree));
+  const auto seen_within = [&](const MotorCommand& command) {
+    unsigned seen_after = 0;
+    for (unsigned i = 1; i <= PwmMotor::kConfirmEvery && seen_after == 0; ++i) {
+      motor.command(command);
+      if (motor.driver_fault()) seen_after = i;
+    }
+    return seen_after;
+  };
+  SECTION("driving: the PWM disabled under it; the motor is released in that command") {
+    motor.command({0.3, true});
+    REQUIRE(tree.read("enable") == "1");
+    tree.overwrite("enable", "0\n");
+    const unsigned seen_after = seen_within({0.3, true});
+    CHECK(seen_after >= 1);
+    CHECK(seen_after <= PwmMotor::kConfirmEvery);
+    CHECK_FALSE(motor.stats().enabled);
+    CHECK(motor.stats().duty_ns == 0);
+    CHECK(tree.read("duty_cycle") == "0");
+    CHECK(motor.stats().failed_commands == 1);
+  }
+  SECTION("at rest: the enable changed under it; the lever's own value is written again") {
+    motor.command({0.0, false});
+    const std::string own = tree.read("enable");
+    tree.overwrite("enable", own == "1" ? "0\n" : "1\n");
+    const unsigned seen_after = seen_within({0.0, false});
+    CHECK(seen_after >= 1);
+    CHECK(seen_after <= PwmMotor::kConfirmEvery);
+    CHECK(tree.read("enable") == own);
+    CHECK(tree.read("duty_cycle") == "0");
+    CHECK(motor.stats().failed_commands == 1);
+  }
+  // Reported once per foreign write: the core latches MOTOR_DRIVER on it, and a read-back that agrees again
+  // reports nothing.
+  for (unsigned i = 0; i < 2 * PwmMotor::kConfirmEvery; ++i) motor.command({0.0, false});
+  CHECK_FALSE(motor.driver_fault());
+}
+
 // In a child: from here on no write may grow a file past `bytes` (the writes fail with EFBIG, partly done), so
 // that a PWM attribute the motor holds open refuses values longer than that, as a channel gone does.
 bool limit_writes_to(rlim_t bytes) {

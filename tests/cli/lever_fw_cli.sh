@@ -120,13 +120,16 @@ timeout 20 "$fw" --config "$work/nochip.toml" 2>"$work/err"; code=$?
 check "without the board's GPIO chip: exit 1 (got $code)" test "$code" -eq 1
 check "and names the encoder and the chip" grep -q "cannot open the encoder.*no-such-gpiochip" "$work/err"
 
-# --motor-off (the service's ExecStopPost=): a PWM channel left running by a lever-fw that died is stopped.
+# --motor-off (the service's ExecStopPost=): a PWM channel left running by a lever-fw that died is stopped. Outside
+# a unit unless a case says otherwise: a unit's runs are told apart by $INVOCATION_ID.
+unset INVOCATION_ID
 pwm=$work/sys/class/pwm/pwmchip0
 mkdir -p "$pwm/pwm0" && : >"$pwm/export"
 printf '1\n' >"$pwm/pwm0/enable"; printf '25000\n' >"$pwm/pwm0/duty_cycle"
 printf '50000\n' >"$pwm/pwm0/period"; printf 'normal\n' >"$pwm/pwm0/polarity"
-printf '[board.motor]\nsysfs_root = "%s"\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n' "$work/sys" \
-  >"$work/motor.toml"
+# The keys that name the motor's hardware, each given: --motor-off never takes a default for one.
+motor_keys='pwm_chip = 0\npwm_channel = 0\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n'
+printf "[board.motor]\nsysfs_root = \"%s\"\n$motor_keys" "$work/sys" >"$work/motor.toml"
 timeout 20 "$fw" --config "$work/motor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
 check "--motor-off: the PWM is disabled" test "$(head -n1 "$pwm/pwm0/enable")" = 0
@@ -143,7 +146,7 @@ for case in fifo-enable fifo-export dir-duty loop-period; do
     dir-duty) rm "$chip/pwm0/duty_cycle"; mkdir "$chip/pwm0/duty_cycle" ;;
     loop-period) rm "$chip/pwm0/period"; ln -s period "$chip/pwm0/period" ;;
   esac
-  printf '[board.motor]\nsysfs_root = "%s"\nenable_line = ""\ndirection_line = ""\nfault_line = ""\n' "$root" >"$work/m.toml"
+  printf "[board.motor]\nsysfs_root = \"%s\"\n$motor_keys" "$root" >"$work/m.toml"
   start=$(date +%s%N)
   timeout 20 "$fw" --config "$work/m.toml" --motor-off 2>"$work/err"; code=$?
   elapsed_ms=$((($(date +%s%N) - start) / 1000000))
@@ -152,7 +155,7 @@ for case in fifo-enable fifo-export dir-duty loop-period; do
     test "$elapsed_ms" -lt 3000
   check "--motor-off on $case: names the file" grep -q "motor-off: cannot stop the motor .*: motor PWM: .*$root" "$work/err"
 done
-printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nomotor.toml"
+printf "[board.motor]\nsysfs_root = \"%s\"\n$motor_keys" "$work/no-such-sys" >"$work/nomotor.toml"
 timeout 20 "$fw" --config "$work/nomotor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off without the PWM: exit 1 (got $code)" test "$code" -eq 1
 check "--motor-off without the PWM: names it" grep -q "motor-off: cannot stop the motor.*no-such-sys" "$work/err"
@@ -210,12 +213,88 @@ motor_off_case "file cut short at a line's end (valid TOML, no motor keys)" 0 \
 # Edited under the running lever to name another channel: the one it ran (its state) stops; the configuration's
 # new one is not this lever's motor yet, and is left alone (on a machine of two levers it may be the other's).
 mkdir -p "$pwm/pwm1" && for f in enable duty_cycle period polarity; do cp "$pwm/pwm0/$f" "$pwm/pwm1/$f"; done
-sed 's/^pwm_channel = 0/pwm_channel = 1/' "$work/run/motor" >"$work/other.toml"
+sed -n '/^\[board.motor\]/,$p' "$work/run/motor" | sed 's/^pwm_channel = 0/pwm_channel = 1/' >"$work/other.toml"
 printf '1\n' >"$pwm/pwm1/enable"
 motor_off_case "the configuration names another channel than the state" 0 \
   "the configuration names another motor than the one this lever ran" "$work/other.toml" --motor-state "$work/run/motor"
 check "--motor-off, another channel: the state's stopped, the configuration's left running" \
   test "$(head -n1 "$pwm/pwm1/enable")" = 1
+# The motor named explicitly or not at all: a key left out is its default, and the defaults name a motor too
+# (pwmchip0/pwm0; here under the test's sysfs root, on a board maybe another lever's). Each case below must leave
+# the running motor's tree exactly as it was (every file under $work/sys), exit as said, and say why.
+tree_sum() { find "$work/sys" -type f -print0 | sort -z | xargs -0 cat | md5sum; }
+untouched_case() {  # NAME EXPECTED_CODE SAYS INVOCATION_ID CONFIG [ARGS...]: --motor-off that must stop nothing
+  local name=$1 expected=$2 says=$3 invocation=$4 config=$5; shift 5
+  running
+  local before; before=$(tree_sum)
+  INVOCATION_ID=$invocation timeout 20 "$fw" --config "$config" --motor-off "$@" 2>"$work/err"; code=$?
+  check "--motor-off, $name: exit $expected (got $code: $(tr '\n' '|' <"$work/err"))" test "$code" -eq "$expected"
+  check "--motor-off, $name: the PWM tree is untouched (enable $(head -n1 "$pwm/pwm0/enable"))" \
+    test "$(tree_sum)" = "$before"
+  check "--motor-off, $name: says '$says'" grep -qF -- "$says" "$work/err"
+  if ((expected == 1)); then check "--motor-off, $name: says the motor is NOT stopped" grep -qF "NOT stopped" "$work/err"; fi
+}
+printf '[board.motor]\nsysfs_root = "%s"\n[board.moter]\npwm_chip = 0\npwm_channel = 0\nenable_line = ""\n' "$work/sys" \
+  >"$work/typo.toml"
+untouched_case "the motor's keys under a misspelt [board.moter]" 1 \
+  "board.motor.pwm_chip, board.motor.pwm_channel, board.motor.enable_line, board.motor.direction_line, board.motor.fault_line, board.motor.line_chip: missing" \
+  "" "$work/typo.toml"
+check "--motor-off, [board.moter]: names the misspelt keys" grep -qF "board.moter.pwm_chip: unknown key" "$work/err"
+untouched_case "an empty configuration" 1 "board.motor.pwm_chip, board.motor.pwm_channel" "" "$work/empty.toml"
+printf '[board.motor]\nsysfs_root = "%s"\n' "$work/sys" >"$work/root-only.toml"
+untouched_case "a configuration with the sysfs root alone" 1 \
+  "the configuration's motor keys do not name a motor, and no --motor-state" "" "$work/root-only.toml"
+printf '[board.motor]\nsysfs_root = "%s"\npwm_chip = 0\npwm_channel = 0\nenable_line = "3"\ndirection_line = ""\nfault_line = ""\n' \
+  "$work/sys" >"$work/no-line-chip.toml"
+untouched_case "an enable line without its chip" 1 "board.motor.line_chip: missing" "" "$work/no-line-chip.toml"
+
+# A state names the motor whole or not at all: beside a valid configuration, an empty or cut one stops nothing
+# (neither the defaults' motor nor the configuration's, which the lever may never have opened).
+mkdir -p "$work/states"
+: >"$work/states/empty"
+untouched_case "an empty state beside a valid configuration" 1 "board.motor.sysfs_root, board.motor.pwm_chip" "" \
+  "$work/motor.toml" --motor-state "$work/states/empty"
+check "--motor-off, an empty state: says it names no motor" grep -qF "names no motor" "$work/err"
+sed '/^pwm_chip = /,$d' "$work/run/motor" >"$work/states/cut-at-line"  # valid TOML up to the sysfs root
+untouched_case "a state cut at a line's end (the sysfs root kept)" 1 "board.motor.pwm_chip, board.motor.pwm_channel" "" \
+  "$work/motor.toml" --motor-state "$work/states/cut-at-line"
+head -c "$(($(stat -c %s "$work/run/motor") / 2))" "$work/run/motor" >"$work/states/cut-half"
+untouched_case "a state cut in half" 1 "names no motor" "" "$work/motor.toml" --motor-state "$work/states/cut-half"
+# Short of its last key only (the lines' polarity, which says which level is off): not whole, so not the lever's.
+sed '/^lines_active_low = /d' "$work/run/motor" >"$work/states/no-polarity"
+untouched_case "a state short of its last key" 1 "board.motor.lines_active_low: missing" "" "$work/motor.toml" \
+  --motor-state "$work/states/no-polarity"
+sed '/^\[writer\]/,/^pid = /d' "$work/run/motor" >"$work/states/no-writer"
+untouched_case "a state without its writer" 1 "writer.invocation_id, writer.boot_id, writer.pid: missing" "" \
+  "$work/motor.toml" --motor-state "$work/states/no-writer"
+untouched_case "no state outside a unit" 1 "no motor state $work/states/none" "" "$work/motor.toml" \
+  --motor-state "$work/states/none"
+if [[ -r /proc/sys/kernel/random/boot_id ]]; then
+  sed 's/^boot_id = .*/boot_id = "00000000-0000-0000-0000-000000000000"/' "$work/run/motor" >"$work/states/other-boot"
+  untouched_case "a state of another boot" 1 "is STALE: written by pid" "" "$work/motor.toml" \
+    --motor-state "$work/states/other-boot"
+fi
+
+# Under the unit ($INVOCATION_ID, the same for ExecStart and ExecStopPost): a state of this invocation only.
+# RuntimeDirectoryPreserve=restart keeps an earlier run's; a run that died before its state was written opened
+# nothing, so --motor-off says so and exits 0, and never falls back to the configuration's motor.
+unit_a=0123456789abcdef0123456789abcdef unit_b=fedcba9876543210fedcba9876543210
+mkdir -p "$work/unit"
+INVOCATION_ID=$unit_a timeout 20 "$fw" --config "$work/run.toml" --motor-state "$work/unit/motor" 2>"$work/err"
+check "a lever-fw under a unit names its invocation in the state" grep -qE "^invocation_id = [\"']$unit_a[\"'] " "$work/unit/motor"
+check "and its pid" grep -qx 'pid = [1-9][0-9]*' "$work/unit/motor"
+untouched_case "a state of another invocation of the unit" 1 \
+  "is STALE: written by another run (pid" "$unit_b" "$work/motor.toml" --motor-state "$work/unit/motor"
+check "--motor-off, another invocation: names both" grep -qF "invocation $unit_a), not this one (invocation $unit_b)" "$work/err"
+untouched_case "no state under the unit (the run died before it opened anything)" 0 \
+  "nothing to stop: this run (invocation $unit_b) wrote no motor state $work/unit/none" "$unit_b" \
+  "$work/motor.toml" --motor-state "$work/unit/none"
+running
+INVOCATION_ID=$unit_a timeout 20 "$fw" --config "$work/motor.toml" --motor-state "$work/unit/motor" --motor-off \
+  2>"$work/err"; code=$?
+check "--motor-off, the state of this invocation: exit 0 (got $code: $(tr '\n' '|' <"$work/err"))" test "$code" -eq 0
+check "--motor-off, the state of this invocation: the motor is stopped" stopped
+check "--motor-off, the state of this invocation: named by it" grep -qF "(named by the motor state $work/unit/motor)" "$work/err"
 "$fw" --config "$work/motor.toml" --motor-off --check-config 2>/dev/null; code=$?
 check "--motor-off with --check-config: exit 2 (got $code)" test "$code" -eq 2
 "$fw" --config "$examples/top.toml" --sim 2>/dev/null; code=$?

@@ -174,9 +174,9 @@ std::optional<std::string> ConfigSchema::load_file(const std::string& path) {
 }
 
 std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_file_each(const std::string& path) {
-  const auto file = program::read_config_file(path);
-  if (!file.error.empty()) return {{"", file.error}};
-  return load_string_each(file.text, path);
+  const auto parsed = parse_file(path);
+  if (!parsed.error.empty()) return {{"", parsed.error}};
+  return load_table_each(parsed.table, path);
 }
 
 std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_string_each(std::string_view text,
@@ -187,6 +187,11 @@ std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_string_each(std::string
   } catch (const toml::parse_error& e) {
     return {{"", fmt::format("{}:{}: {}", source_name, e.source().begin.line, e.description())}};
   }
+  return load_table_each(t, source_name);
+}
+
+std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_table_each(const toml::table& t,
+                                                                    const std::string& source_name) {
   std::vector<KeyProblem> problems;
   std::vector<std::string> keys;
   collect_keys(t, "", keys);
@@ -199,6 +204,28 @@ std::vector<ConfigSchema::KeyProblem> ConfigSchema::load_string_each(std::string
     if (auto e = f.load(*node.node())) problems.push_back({f.key, fmt::format("{}: {}: {}", source_name, f.key, *e)});
   }
   return problems;
+}
+
+ConfigSchema::Parsed ConfigSchema::parse_file(const std::string& path) {
+  Parsed out;
+  const auto file = program::read_config_file(path);
+  if (!file.error.empty()) {
+    out.error = file.error;
+    return out;
+  }
+  try {
+    out.table = toml::parse(file.text, path);
+  } catch (const toml::parse_error& e) {
+    out.error = fmt::format("{}:{}: {}", path, e.source().begin.line, e.description());
+  }
+  return out;
+}
+
+std::vector<std::string> ConfigSchema::keys(std::string_view prefix) const {
+  std::vector<std::string> out;
+  for (const auto& f : fields_)
+    if (f.key.starts_with(prefix)) out.push_back(f.key);
+  return out;
 }
 
 std::optional<std::string> ConfigSchema::load_value(const std::string& key, const toml::node& value,

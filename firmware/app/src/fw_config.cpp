@@ -364,11 +364,12 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   return out;
 }
 
-MotorKeys load_motor_keys(const std::string& path) {
+MotorKeys motor_keys_from(const toml::table& table, const std::string& source, MotorKeysRequired required) {
   constexpr std::string_view kMotor = "board.motor.";
   MotorKeys out;
   FwConfig config;
-  auto each = schema_for(config).load_file_each(path);
+  auto schema = schema_for(config);
+  auto each = schema.load_table_each(table, source);
   // The motor's problems first: they are the ones that decide.
   std::stable_partition(each.begin(), each.end(),
                         [&](const ConfigSchema::KeyProblem& p) { return p.key.empty() || p.key.starts_with(kMotor); });
@@ -377,19 +378,46 @@ MotorKeys load_motor_keys(const std::string& path) {
     if (p.key.empty() || p.key.starts_with(kMotor)) motor_readable = false;
     out.problems.push_back(p.message);
   }
+  // A key left out is its default, and the defaults name a motor too (pwmchip0/pwm0, gpiochip0's MOTOR_EN): on
+  // a board that has it, a stop would act on a channel nobody named, maybe another lever's.
+  std::vector<std::string> named;
+  if (required == MotorKeysRequired::every_key) {
+    named = schema.keys(kMotor);
+  } else {
+    const auto& b = config.board;
+    named = {"board.motor.pwm_chip", "board.motor.pwm_channel", "board.motor.enable_line",
+             "board.motor.direction_line", "board.motor.fault_line"};
+    if (!b.motor_enable_line.empty() || !b.motor_direction_line.empty() || !b.motor_fault_line.empty())
+      named.push_back("board.motor.line_chip");
+  }
+  std::string missing;
+  for (const auto& key : named)
+    if (!table.at_path(key)) missing += (missing.empty() ? "" : ", ") + key;
+  if (!missing.empty() && motor_readable) {
+    out.problems.insert(out.problems.begin(),
+                        fmt::format("{}: {}: missing; the motor is named by its keys, never by their defaults", source,
+                                    missing));
+    motor_readable = false;
+  }
   if (motor_readable) {
     const auto motor = motor_config(config.board);
     if (const auto invalid = motor.validate(); !invalid.empty()) {
       for (const auto& p : invalid)
-        out.problems.insert(out.problems.begin(), fmt::format("{}: board.motor: {}", path, p));
+        out.problems.insert(out.problems.begin(), fmt::format("{}: board.motor: {}", source, p));
     } else {
       out.motor = motor;
     }
   }
+  return out;
+}
+
+MotorKeys load_motor_keys(const std::string& path) {
+  const auto parsed = ConfigSchema::parse_file(path);
+  if (!parsed.error.empty()) return {std::nullopt, {parsed.error}};
+  MotorKeys out = motor_keys_from(parsed.table, path, MotorKeysRequired::identity);
   // What one key cannot say alone, said once every key has loaded.
-  if (each.empty()) {
-    if (auto whole = load_fw_config(path); !whole.error.empty() && (out.motor || out.problems.empty()))
-      out.problems.push_back(whole.error);
+  if (out.motor && out.problems.empty()) {
+    if (auto whole = load_fw_config(path); !whole.error.empty()) out.problems.push_back(whole.error);
   }
   return out;
 }

@@ -49,8 +49,9 @@ int main(int argc, char** argv) {
                "manager after lever-fw ended, however it ended")
       ->excludes("--check-config");
   app.add_option("--motor-state", motor_state,
-                 "a file naming the motor: written at start, before the motor is opened; read by --motor-off when "
-                 "the configuration's motor keys cannot be (the service: /run/lever/INSTANCE/motor)")
+                 "a file naming the motor and the run: written at start, before the motor is opened; with it, "
+                 "--motor-off stops that motor only, and under systemd only its own invocation's (the service: "
+                 "/run/lever/INSTANCE/motor)")
       ->check(program::path());
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 

@@ -79,6 +79,19 @@ class ConfigSchema {
   };
   std::vector<KeyProblem> load_file_each(const std::string& path);
   std::vector<KeyProblem> load_string_each(std::string_view text, const std::string& source_name);
+  std::vector<KeyProblem> load_table_each(const toml::table& t, const std::string& source_name);
+
+  // A file as TOML, for a reader that must also see which keys it holds, not only their values (a key left out
+  // is a default, which --motor-off must not take for a motor's name). `error`: the read's or the syntax's
+  // ("FILE:LINE: problem"), the table then empty.
+  struct Parsed {
+    toml::table table;
+    std::string error;
+  };
+  static Parsed parse_file(const std::string& path);
+
+  // The dotted keys that start with `prefix`, in the schema's order.
+  std::vector<std::string> keys(std::string_view prefix) const;
 
   // The effective configuration as a TOML document, every key with its unit and documentation; with a prefix
   // ("board.motor."), only the keys that start with it.

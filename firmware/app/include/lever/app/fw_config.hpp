@@ -109,12 +109,19 @@ struct LoadedConfig {
 LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& overrides = {});
 
 // The motor's keys alone ([board.motor]), read from a file whatever else in it is wrong: what --motor-off needs.
-// `motor` is empty when they cannot be had (the file unreadable or not TOML, a motor key wrong, the motor's
-// configuration invalid); `problems` lists every problem the file has, the motor's keys' first.
+// `motor` is empty when they cannot be had (the file unreadable or not TOML, a motor key wrong or missing, the
+// motor's configuration invalid); `problems` lists every problem the file has, the motor's keys' first.
 struct MotorKeys {
   std::optional<platform::PwmMotorConfig> motor;
   std::vector<std::string> problems;
 };
+// Which keys must be in the file, since a key left out would be its default: `identity`, those that say which
+// hardware the motor is (the PWM chip and channel, the three lines, and the lines' chip when one is named);
+// `every_key`, all of [board.motor] (the motor state, which has them all when written whole).
+enum class MotorKeysRequired { identity, every_key };
+MotorKeys motor_keys_from(const toml::table& table, const std::string& source, MotorKeysRequired required);
+// A configuration's motor keys (`identity` required). Its other problems, those of one key and those of keys
+// together (load_fw_config's), are listed too.
 MotorKeys load_motor_keys(const std::string& path);
 
 // The [board.motor] keys of a configuration as a TOML file of their own, which load_motor_keys reads back: the
