@@ -114,11 +114,25 @@ check "--check-config prints the long-step threshold" grep -q '^long_step_us = 1
 "$fw" --config "$examples/hsi.toml" --role top --check-config >"$work/override"
 check "--role overrides the file" grep -q '^role = "top"' "$work/override"
 
-# On a machine without the board's hardware: a runtime failure naming what could not be opened, no hang.
-printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n' >"$work/nochip.toml"
+# On a machine without the board's hardware: a runtime failure naming what could not be opened, no hang. The motor
+# is opened first, and its guard started with it (docs/board-motor.md, "The motor guard").
+printf '[board.motor]\nsysfs_root = "%s"\n' "$work/no-such-sys" >"$work/nopwm.toml"
+timeout 20 "$fw" --config "$work/nopwm.toml" 2>"$work/err"; code=$?
+check "without the board's PWM: exit 1 (got $code)" test "$code" -eq 1
+check "and names the motor and the PWM chip" grep -q "cannot open the motor.*pwmchip0" "$work/err"
+guard_tree=$work/guard-sys/class/pwm/pwmchip0
+mkdir -p "$guard_tree/pwm0" && : >"$guard_tree/export"
+printf '0\n' >"$guard_tree/pwm0/enable"; printf '0\n' >"$guard_tree/pwm0/duty_cycle"
+printf '50000\n' >"$guard_tree/pwm0/period"; printf 'normal\n' >"$guard_tree/pwm0/polarity"
+printf '[board.encoder]\nchip = "/dev/no-such-gpiochip"\n[board.motor]\nsysfs_root = "%s"\n%s\n' "$work/guard-sys" \
+  'enable_line = ""
+direction_line = ""
+fault_line = ""' >"$work/nochip.toml"
 timeout 20 "$fw" --config "$work/nochip.toml" 2>"$work/err"; code=$?
 check "without the board's GPIO chip: exit 1 (got $code)" test "$code" -eq 1
 check "and names the encoder and the chip" grep -q "cannot open the encoder.*no-such-gpiochip" "$work/err"
+check "after its motor guard had started" grep -q "motor guard pid [0-9]*: deadline" "$work/err"
+check "which stopped the motor when lever-fw ended" grep -q "motor guard: the lever (pid [0-9]*) ended: motor off" "$work/err"
 
 # --motor-off (the service's ExecStopPost=): a PWM channel left running by a lever-fw that died is stopped. Outside
 # a unit unless a case says otherwise: a unit's runs are told apart by $INVOCATION_ID.
