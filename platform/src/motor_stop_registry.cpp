@@ -62,8 +62,9 @@ void stop_slots(bool only_own) noexcept {
     wait_for_command(slot, this_thread, deadline_ms);
     const int duty = slot.duty_fd.load();
     const int enable = slot.enable_fd.load();
+    // The inactive state, duty 0 with the channel enabled: a disabled PWM's output is undefined (SysfsPwm::stop).
     if (duty >= 0) write_decimal(duty, 0);
-    if (enable >= 0) write_decimal(enable, 0);
+    if (enable >= 0) write_decimal(enable, 1);
   }
   stops_running.fetch_sub(1);
   errno = saved_errno;

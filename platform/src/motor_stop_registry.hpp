@@ -1,6 +1,6 @@
 #pragma once
 // Every open PwmMotor's two PWM files, kept where a signal handler can reach them: the process-wide
-// emergency stop writes duty 0 and disable to each, with pwrite alone.
+// emergency stop writes duty 0 and enable 1 to each (the inactive state: SysfsPwm::stop), with pwrite alone.
 #include <cstddef>
 
 namespace lever::platform {

@@ -26,7 +26,7 @@ bool stop(const platform::PwmMotorConfig& config, const char* named_by) {
     fmt::print(stderr, "lever-fw: --motor-off: cannot stop the motor {} names: {}\n", named_by, motor.error().message);
     return false;
   }
-  fmt::print(stderr, "lever-fw: --motor-off: {} (named by {}): PWM disabled at duty 0, enable line off\n",
+  fmt::print(stderr, "lever-fw: --motor-off: {} (named by {}): PWM at duty 0 (enabled: the inactive level), enable line off\n",
              motor.value().description(), named_by);
   return true;
 }

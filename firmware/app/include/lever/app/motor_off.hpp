@@ -13,8 +13,8 @@ namespace lever::app {
 // the configuration's [board.motor] keys name, whatever else in the file is wrong (each other problem is said on
 // stderr and changes nothing).
 //
-// A stop is an open of the motor: the PWM disabled at duty 0 (written before anything else, so a GPIO line that
-// cannot be had does not keep the PWM running), then the enable and direction lines requested deasserted;
+// A stop is an open of the motor: the PWM at duty 0, left enabled there, its inactive level (written before
+// anything else, so a GPIO line that cannot be had does not keep the PWM running), then the enable and direction lines requested deasserted;
 // closing it leaves them so. Returns the process's exit code: 0 the motor was stopped, 1 it could not be (or no
 // motor could be named), the reason on stderr; the PWM writes that went through stand.
 int motor_off(const std::string& config_path, const std::string& state_path);
