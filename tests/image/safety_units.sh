@@ -5,7 +5,8 @@
 #   1. the TOP's loop hung (SIGSTOP): systemd's WatchdogSec fires (SIGABRT, then SIGCONT), the motor off within
 #      WatchdogSec + 50 ms (the feeder looks every quarter of it, docs/deploy.md); Restart=on-failure brings the
 #      lever back disarmed and unhomed;
-#   2. the TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables the PWM, which the kernel keeps as the
+#   2. the TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off puts the PWM at duty 0 (enabled: the pin's
+#      inactive level; a disabled one's output is undefined), which the kernel keeps as the
 #      dead writer left it, and the world holds the released enable line where it was (as most GPIO controllers
 #      do); bound: the unit's own budget for a lever whose loop no longer commands its motor, WatchdogSec + 50 ms,
 #      the same as for a hung loop (docs/deploy.md, "The reference board image", says why not lever_faults.sh's
@@ -81,7 +82,8 @@ kill -KILL "$top_pid"
 # controllers keep a released output); the PWM keeps its duty: the motor runs until ExecStopPost's lever-fw
 # --motor-off disables it.
 time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off, motor off" 0 "$uncommanded_ms" "$t0" motor_off top
-time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
+time_to "TOP killed (SIGKILL): ExecStopPost's lever-fw --motor-off puts its PWM pin at the inactive level" 0 \
+  "$uncommanded_ms" "$t0" pwm_inactive top
 poll_rt off
 applied_since top "$t0"
 require "Restart=on-failure: lever-fw@top runs again" wait_until $((restart_s + 30)) restarted top "$pid"
@@ -96,7 +98,8 @@ clock_now
 t0=$now
 kill -KILL "$top_pid"
 time_to "TOP killed a third time: motor off" 0 "$uncommanded_ms" "$t0" motor_off top
-time_to "TOP killed a third time: ExecStopPost disables its PWM" 0 "$uncommanded_ms" "$t0" pwm_disabled top
+time_to "TOP killed a third time: ExecStopPost puts its PWM pin at the inactive level" 0 "$uncommanded_ms" "$t0" \
+  pwm_inactive top
 poll_rt off
 sleep $((restart_s + 5))
 # systemd keeps the last failure's Result (signal) and says why it refused the fourth start in the journal.

@@ -7,8 +7,9 @@
 #   and its motor stopped by `lever-fw --motor-off` (its configuration cut in half meanwhile), as the service's
 #   ExecStopPost does; the TOP's PWM channel
 #   unexported under it; the HSI's gpio-sim chip removed.
-# The safe state, read from the devices: the HSI's motor off (its PWM controller disabled or at duty 0, or its
-# driver's enable line low); for the TOP the same, and where its rule is to hold for safe_hold_ms first, no sooner.
+# The safe state, read from the devices' outputs: the HSI's motor off (its PWM pin giving the driver no duty, or its
+# driver's enable line low; never the controller's enabled flag, since the rig's controller holds a disabled pin
+# where it was); for the TOP the same, and where its rule is to hold for safe_hold_ms first, no sooner.
 # After each fault that a re-arm can clear, the pair is re-armed and the next one comes.
 # usage: lever_faults.sh BIN_DIR
 set -uo pipefail
@@ -133,6 +134,9 @@ wait "$top_pid" 2>/dev/null  # reaped, its lines released: systemd runs ExecStop
 lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
 motor_off_code=$?
 time_to "TOP killed, then lever-fw --motor-off: TOP motor off" 0 100 "$t0" motor_off top
+# The enable line alone would do above; the PWM, which the kernel keeps as the dead writer left it, must be at its
+# inactive level too (duty 0, enabled: a PWM disabled while its pin was high holds it high).
+time_to "TOP killed, then lever-fw --motor-off: TOP's PWM pin inactive" 0 100 "$t0" pwm_inactive top
 time_to "TOP killed: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
 poll_rt off
 check "lever-fw --motor-off on a configuration cut in half: exit 0 (got $motor_off_code)" test "$motor_off_code" -eq 0
