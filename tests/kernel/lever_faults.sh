@@ -89,15 +89,17 @@ for stop_ms in 4 20 50; do
 done
 
 # 2. The CAN interface down for half a second: both levers hear nothing. The HSI stops its motor; the TOP holds
-# where it was for safe_hold_ms, then lets go (so its motor stops no sooner than that).
+# where it was for safe_hold_ms, then lets go (so its motor stops no sooner than that). The TOP's end of the hold is
+# its driver's enable line going low: a hold may sit at duty 0 (no torque at the pin, seen at 216.7 ms into a
+# 500 ms hold), which motor_off rightly reads as no torque, and then the release writes no new PWM state at all.
 hold_ms=$(key top safety safe_hold_ms)
 poll_rt on
 clock_now
 t0=$now
 ip link set vcan0 down
 time_to "vcan0 down: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
-time_to "vcan0 down: the TOP holds, then its motor off" "$hold_ms" $((comms_ms + hold_ms + 2 * tick_ms)) "$t0" \
-  motor_off top
+time_to "vcan0 down: the TOP holds, then releases its driver" "$hold_ms" $((comms_ms + hold_ms + 2 * tick_ms)) "$t0" \
+  enable_low top
 poll_rt off
 ip link set vcan0 up
 check "vcan0 down: the HSI latched COMMS" wait_for 5 hsi '.faults | index("comms_timeout") != null'
@@ -109,8 +111,8 @@ poll_rt on
 clock_now
 t0=$now
 kill -USR1 "$serve_pid"
-time_to "gauge server gone: the TOP holds, then its motor off" "$hold_ms" $((stale_ms + hold_ms + 2 * tick_ms)) "$t0" \
-  motor_off top
+time_to "gauge server gone: the TOP holds, then releases its driver" "$hold_ms" $((stale_ms + hold_ms + 2 * tick_ms)) \
+  "$t0" enable_low top
 poll_rt off
 check "gauge server gone: the TOP latched FORCE_STALE" wait_for 5 top '.faults | index("force_stale") != null'
 kill -USR2 "$serve_pid"
