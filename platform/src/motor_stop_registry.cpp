@@ -66,8 +66,9 @@ void stop_slots(bool only_own) noexcept {
     const int duty = slot.duty_fd.load();
     const int enable = slot.enable_fd.load();
     if (line >= 0) set_line_request(line, false);
+    // The inactive state, duty 0 with the channel enabled: a disabled PWM's output is undefined (SysfsPwm::stop).
     if (duty >= 0) write_decimal(duty, 0);
-    if (enable >= 0) write_decimal(enable, 0);
+    if (enable >= 0) write_decimal(enable, 1);
   }
   stops_running.fetch_sub(1);
   errno = saved_errno;

@@ -1,6 +1,7 @@
 #pragma once
 // Every open PwmMotor's two PWM files and its enable line's request, kept where a signal handler can reach them:
-// the process-wide emergency stop deasserts the line (one ioctl) and writes the PWM's files (pwrite).
+// the process-wide emergency stop deasserts the line (one ioctl), then writes duty 0 and enable 1 to the PWM (the
+// inactive state: SysfsPwm::stop), with pwrite.
 #include <cstddef>
 
 namespace lever::platform {

@@ -46,10 +46,12 @@ struct PwmMotor::Impl {
     return pwm.set_duty_ns(setpoint.duty_ns) && pwm.set_enabled(true) && lines.set_enabled(true);
   }
 
+  // The driver's enable line first (the fastest way to stop it), then the PWM's inactive state: duty 0 with the
+  // channel enabled, never disabled (SysfsPwm::stop says why).
   bool release() noexcept {
     bool ok = lines.set_enabled(false);
     ok &= pwm.set_duty_ns(0);
-    ok &= pwm.set_enabled(false);
+    ok &= pwm.set_enabled(true);
     return ok;
   }
 

@@ -100,9 +100,11 @@ Result<SysfsPwm> SysfsPwm::open(const PwmMotorConfig& config) {
     }
   }
   // The kernel's PWM core refuses every state with period 0, and a freshly exported channel has period 0 on
-  // many controllers: then the period goes first. Otherwise disabled before anything else (a channel found
-  // exported may be running), and duty 0 before the period, because a period shorter than the duty in force
-  // is refused. Polarity last: controllers change it only while disabled.
+  // many controllers: then the period goes first. A channel found exported may be running: duty 0 before the
+  // disable, so that a controller that stops a disabled pin where it is (the kernel leaves a disabled output
+  // undefined) stops it at the inactive level. Disabled next, because controllers change the polarity only while
+  // disabled, and duty 0 before the period, because a period shorter than the duty in force is refused. Then
+  // enabled at duty 0: the one state whose output the kernel defines as inactive, whatever the polarity.
   const auto failed = [&](const char* attribute, const std::string& value) {
     const int err = errno;
     return os_error(err, "motor PWM: cannot write " + value + " to " + dir + "/" + attribute);
@@ -112,15 +114,16 @@ Result<SysfsPwm> SysfsPwm::open(const PwmMotorConfig& config) {
   if (*period_in_force == 0 && !write_decimal(period.get(), config.period_ns)) {
     return failed("period", std::to_string(config.period_ns));
   }
-  if (!write_decimal(enable.get(), 0)) return failed("enable", "0");
   if (!write_decimal(duty.get(), 0)) return failed("duty_cycle", "0");
+  if (!write_decimal(enable.get(), 0)) return failed("enable", "0");
   if (!write_decimal(period.get(), config.period_ns)) return failed("period", std::to_string(config.period_ns));
   const char* polarity_text = config.pwm_inversed ? "inversed" : "normal";
   if (!write_text(polarity.get(), polarity_text)) return failed("polarity", polarity_text);
+  if (!write_decimal(enable.get(), 1)) return failed("enable", "1");
 
   SysfsPwm pwm(std::move(duty), std::move(enable), name);
   pwm.duty_written_ = 0;
-  pwm.enabled_written_ = false;
+  pwm.enabled_written_ = true;
   return pwm;
 }
 
@@ -156,7 +159,7 @@ void SysfsPwm::stop() noexcept {
   duty_written_.reset();
   enabled_written_.reset();
   set_duty_ns(0);
-  set_enabled(false);
+  set_enabled(true);
 }
 
 }  // namespace lever::platform

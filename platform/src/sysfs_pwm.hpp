@@ -14,8 +14,8 @@ namespace lever::platform {
 class SysfsPwm {
  public:
   // Exports the channel unless pwmM/ is there already (left exported by an earlier run or a boot script: it
-  // is taken over as found), waits for its attributes, and writes enable 0, duty_cycle 0, period and polarity
-  // in the order the kernel accepts from any earlier state.
+  // is taken over as found), waits for its attributes, and writes duty_cycle 0, enable 0, period, polarity and
+  // enable 1, in the order the kernel accepts from any earlier state: the channel is left enabled at duty 0.
   static Result<SysfsPwm> open(const PwmMotorConfig& config);
 
   // Each writes only when the value differs from the last one written; false when the write failed (the
@@ -35,7 +35,10 @@ class SysfsPwm {
   // differs or cannot be read; the value last written is then forgotten, as after a failed write, so that the
   // next set_enabled writes again. True when no value is known to compare with.
   bool enable_as_written() noexcept;
-  // Duty 0 then disabled, written whatever was written before.
+  // The inactive state: duty 0, then enabled, written whatever was written before. Not disabled: the kernel's
+  // PWM documentation leaves a disabled channel's output undefined (some controllers hold the pin where it was,
+  // others drive it low, which an inverting board turns into full duty at the driver); enabled at duty 0 the pin
+  // sits at its inactive level whatever the polarity.
   void stop() noexcept;
 
   // For the emergency stop, which writes to them from a signal handler.

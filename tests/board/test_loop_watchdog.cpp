@@ -306,7 +306,7 @@ KillTimes run_and_hang(Hang hang) {
   times.stuck_to_exit_ms = static_cast<double>(exit_ns - stuck_ns) * 1e-6;
   times.last_feed_after_ms = static_cast<double>(feeds_sent_ns.back() - stuck.realtime_ns) * 1e-6;
   for (const std::int64_t sent : feeds_sent_ns) times.feeds_after_stuck += sent > stuck.realtime_ns ? 1 : 0;
-  times.motor_off = tree.read("enable") == "0" && tree.read("duty_cycle") == "0";
+  times.motor_off = tree.read("enable") == "1" && tree.read("duty_cycle") == "0";  // the inactive state
   return times;
 }
 

@@ -64,7 +64,9 @@ bool mentions(const std::vector<std::string>& problems, const std::string& text)
   return false;
 }
 
-bool stopped(const PwmSysfsTree& tree) { return tree.read("duty_cycle") == "0" && tree.read("enable") == "0"; }
+// Stopped is the inactive state: duty 0 with the channel enabled. A disabled channel's output is undefined (the
+// kernel's PWM documentation): some controllers hold the pin where it was, so "enable 0" is not off.
+bool stopped(const PwmSysfsTree& tree) { return tree.read("duty_cycle") == "0" && tree.read("enable") == "1"; }
 
 // In a child: a motor driving 0.3 Nm, so that a stop has something to undo. Exit code 90: it did not drive.
 PwmMotor driving_motor(const PwmSysfsTree& tree) {
@@ -144,12 +146,14 @@ TEST_CASE("TorqueToDuty: magnitude over the torque at full duty, clamped, with a
   CHECK(positive_only(-0.3).duty_ns == 0);
 }
 
-TEST_CASE("PwmMotor: open disables the channel, zeroes the duty, then writes the period and polarity", "[motor]") {
+TEST_CASE("PwmMotor: open zeroes the duty, writes the period and polarity, and leaves the channel enabled at duty 0",
+          "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);  // as a crashed run left it: enabled, duty 123456, inversed
+  tree.overwrite("enable", "untouched\n");  // so that the 1 read below is one open wrote
   PwmMotorConfig c = config_for(tree);
   SECTION("normal polarity") {
     const PwmMotor motor = open_or_fail(c);
-    CHECK(tree.read("enable") == "0");
+    CHECK(tree.read("enable") == "1");
     CHECK(tree.read("duty_cycle") == "0");
     CHECK(tree.read("period") == "50000");
     CHECK(tree.read("polarity") == "normal");
@@ -185,7 +189,7 @@ TEST_CASE("PwmMotor: open names a PWM chip that is not there", "[motor]") {
   CHECK(motor.error().message.find("class/pwm/pwmchip7") != std::string::npos);
 }
 
-TEST_CASE("PwmMotor: the duty follows the torque; disabled, the channel is off at zero duty", "[motor]") {
+TEST_CASE("PwmMotor: the duty follows the torque; disabled, the channel is at zero duty, still enabled", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   PwmMotor motor = open_or_fail(config_for(tree));
   motor.command({0.3, true});
@@ -203,7 +207,7 @@ TEST_CASE("PwmMotor: the duty follows the torque; disabled, the channel is off a
   CHECK(tree.read("duty_cycle") == "10000");
   motor.command({0.2, false});
   CHECK(tree.read("duty_cycle") == "0");
-  CHECK(tree.read("enable") == "0");
+  CHECK(tree.read("enable") == "1");
   CHECK_FALSE(motor.driver_fault());
   CHECK(motor.stats().failed_commands == 0);
 }
@@ -302,7 +306,7 @@ TEST_CASE("PwmMotor: a duty that cannot be written is never driven: the enable i
   PwmSysfsTree tree(kChip, kChannel);
   const int status = wait_status_of_child([&] {
     PwmMotor motor = open_or_fail(config_for(tree));
-    // Disabled since open(): any write to enable in the next command could only raise it (and lower it again).
+    // Enabled at duty 0 since open(): the next command has nothing to write to enable, before or after its duty.
     tree.overwrite("enable", "untouched\n");
     if (!limit_writes_to(3)) return 80;  // "15000\n" cannot be written, "1\n" and "0\n" can
     motor.command({0.3, true});
@@ -321,7 +325,7 @@ TEST_CASE("PwmMotor: a driven motor whose new duty cannot be written is released
     PwmMotor motor = driving_motor(tree);  // 15000 ns, enabled
     if (!limit_writes_to(3)) return 80;
     motor.command({0.4, true});  // "20000\n": refused
-    if (tree.read("enable") != "0") return 1;
+    if (tree.read("duty_cycle") != "0" || tree.read("enable") != "1") return 1;
     if (motor.stats().enabled || motor.stats().duty_ns != 0) return 2;
     if (!motor.driver_fault()) return 3;
     return 0;
@@ -341,7 +345,7 @@ TEST_CASE("PwmMotor: a command allocates nothing", "[motor]") {
   CHECK(lever::test::alloc_count_end() == 0);
 }
 
-TEST_CASE("PwmMotor: destruction and reassignment leave the channel off at zero duty", "[motor]") {
+TEST_CASE("PwmMotor: destruction and reassignment leave the channel at zero duty, enabled", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   PwmSysfsTree other(kChip, kChannel + 1);
   {
@@ -380,7 +384,7 @@ TEST_CASE("PwmMotor: the emergency stop zeroes every open motor at once and latc
 
 // A crash handler's stop on one thread while the loop's thread is in the middle of a command (a multicore board):
 // no write of the command may land after the stop's, since the process may die right after its handler's stop
-// and nothing would write again. The loop's thread is held inside its write of enable 1 (a pause in pwrite,
+// and nothing would write again. The loop's thread is held inside its write of the duty (a pause in pwrite,
 // pwrite_pause.hpp) while the other thread stops every motor: the stop must return only once that write is done
 // and with the motor stopped. In a child: the stop latches for the process.
 TEST_CASE("PwmMotor: a loop thread in the middle of a command cannot undo the emergency stop", "[motor]") {
@@ -388,9 +392,9 @@ TEST_CASE("PwmMotor: a loop thread in the middle of a command cannot undo the em
   const int status = wait_status_of_child([&] {
     PwmMotor motor = driving_motor(tree);
     motor.command({0.0, false});
-    lever::test::pause_next_pwrite_of("1\n", std::chrono::milliseconds(30));
+    lever::test::pause_next_pwrite_of("15000\n", std::chrono::milliseconds(30));
     std::thread loop([&] {
-      motor.command({0.3, true});  // duty, then enable 1: held there
+      motor.command({0.3, true});  // the duty: held there
       while (!motor.driver_fault()) motor.command({0.3, true});
     });
     while (!lever::test::pwrite_paused()) std::this_thread::yield();
@@ -415,7 +419,7 @@ TEST_CASE("PwmMotor: a command interrupted by the emergency stop on its own thre
   const int status = wait_status_of_child([&] {
     PwmMotor motor = driving_motor(tree);
     motor.command({0.0, false});
-    lever::test::pause_next_pwrite_of("1\n", std::chrono::milliseconds(0), [] { PwmMotor::emergency_stop_all(); });
+    lever::test::pause_next_pwrite_of("15000\n", std::chrono::milliseconds(0), [] { PwmMotor::emergency_stop_all(); });
     motor.command({0.3, true});
     if (!lever::test::pwrite_resumed()) return 1;
     return stopped(tree) ? 0 : 2;

@@ -90,7 +90,7 @@ TEST_CASE("enable and direction lines follow the commands; deasserted from the s
   motor.command({-0.4, false});
   CHECK(level(kEnable) == 0);
   CHECK(tree.read("duty_cycle") == "0");
-  CHECK(tree.read("enable") == "0");
+  CHECK(tree.read("enable") == "1");  // at duty 0, the inactive state: the PWM is not disabled
 
   motor.command({0.0, true});  // zero torque leaves the direction as it was: nothing to drive either way
   CHECK(level(kEnable) == 1);
@@ -206,7 +206,7 @@ TEST_CASE("after a SIGINT the next command drops the enable line, the process st
   CHECK(byte == 'y');
   CHECK(level(kEnable) == 0);  // still requested by the child, which drove it low
   CHECK(tree.read("duty_cycle") == "0");
-  CHECK(tree.read("enable") == "0");
+  CHECK(tree.read("enable") == "1");
   REQUIRE(::write(done[1], "x", 1) == 1);
   int status = 0;
   REQUIRE(::waitpid(pid, &status, 0) == pid);

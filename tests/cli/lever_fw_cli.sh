@@ -146,8 +146,9 @@ motor_keys='pwm_chip = 0\npwm_channel = 0\nenable_line = ""\ndirection_line = ""
 printf "[board.motor]\nsysfs_root = \"%s\"\n$motor_keys" "$work/sys" >"$work/motor.toml"
 timeout 20 "$fw" --config "$work/motor.toml" --motor-off 2>"$work/err"; code=$?
 check "--motor-off: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
-check "--motor-off: the PWM is disabled" test "$(head -n1 "$pwm/pwm0/enable")" = 0
+# Stopped is duty 0 with the PWM left enabled: a disabled PWM's output is undefined (docs/board-motor.md).
 check "--motor-off: at duty 0" test "$(head -n1 "$pwm/pwm0/duty_cycle")" = 0
+check "--motor-off: the PWM left enabled (at duty 0: its inactive level)" test "$(head -n1 "$pwm/pwm0/enable")" = 1
 # Bounded in time whatever is under its sysfs root: FIFOs, directories and loops where attributes belong.
 for case in fifo-enable fifo-export dir-duty loop-period; do
   root=$work/sys-$case chip=$work/sys-$case/class/pwm/pwmchip0
@@ -178,16 +179,16 @@ check "--motor-off without the PWM: names it" grep -q "motor-off: cannot stop th
 # lever, a key another version refuses) still stops the motor, and says what else is wrong. When even the motor's
 # keys cannot be read, the motor state the lever wrote at start (--motor-state) names the motor.
 running() { printf '1\n' >"$pwm/pwm0/enable"; printf '30000\n' >"$pwm/pwm0/duty_cycle"; }
-stopped() { [[ $(head -n1 "$pwm/pwm0/enable") == 0 && $(head -n1 "$pwm/pwm0/duty_cycle") == 0 ]]; }
+stopped() { [[ $(head -n1 "$pwm/pwm0/enable") == 1 && $(head -n1 "$pwm/pwm0/duty_cycle") == 0 ]]; }
 motor_off_case() {  # NAME EXPECTED_CODE SAYS CONFIG [--motor-state FILE]: --motor-off on a running motor
   local name=$1 expected=$2 says=$3 config=$4; shift 4
   running
   timeout 20 "$fw" --config "$config" --motor-off "$@" 2>"$work/err"; code=$?
   check "--motor-off, $name: exit $expected (got $code: $(tr '\n' '|' <"$work/err"))" test "$code" -eq "$expected"
   if ((expected == 0)); then
-    check "--motor-off, $name: the motor is stopped (enable 0, duty 0)" stopped
+    check "--motor-off, $name: the motor is stopped (duty 0, enable 1)" stopped
   else
-    check "--motor-off, $name: the motor was left as it was (enable 1)" test "$(head -n1 "$pwm/pwm0/enable")" = 1
+    check "--motor-off, $name: the motor was left as it was (duty 30000)" test "$(head -n1 "$pwm/pwm0/duty_cycle")" = 30000
   fi
   check "--motor-off, $name: says '$says'" grep -qF -- "$says" "$work/err"
 }
@@ -228,11 +229,11 @@ motor_off_case "file cut short at a line's end (valid TOML, no motor keys)" 0 \
 # new one is not this lever's motor yet, and is left alone (on a machine of two levers it may be the other's).
 mkdir -p "$pwm/pwm1" && for f in enable duty_cycle period polarity; do cp "$pwm/pwm0/$f" "$pwm/pwm1/$f"; done
 sed -n '/^\[board.motor\]/,$p' "$work/run/motor" | sed 's/^pwm_channel = 0/pwm_channel = 1/' >"$work/other.toml"
-printf '1\n' >"$pwm/pwm1/enable"
+printf '1\n' >"$pwm/pwm1/enable"; printf '30000\n' >"$pwm/pwm1/duty_cycle"
 motor_off_case "the configuration names another channel than the state" 0 \
   "the configuration names another motor than the one this lever ran" "$work/other.toml" --motor-state "$work/run/motor"
 check "--motor-off, another channel: the state's stopped, the configuration's left running" \
-  test "$(head -n1 "$pwm/pwm1/enable")" = 1
+  test "$(head -n1 "$pwm/pwm1/duty_cycle")" = 30000
 # The motor named explicitly or not at all: a key left out is its default, and the defaults name a motor too
 # (pwmchip0/pwm0; here under the test's sysfs root, on a board maybe another lever's). Each case below must leave
 # the running motor's tree exactly as it was (every file under $work/sys), exit as said, and say why.

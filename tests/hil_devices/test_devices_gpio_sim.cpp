@@ -262,9 +262,10 @@ TEST_CASE("motor readback: sign from the direction line, enable from the line an
     CHECK(std::abs(readback.read().torque_nm - -0.6) <= kQuantum);
     CHECK(readback.read_errors() == 0);
   }
-  // The motor's destructor stops it: the PWM disabled. (Its enable line's low level, driven for less than the
-  // time between two reads before it is released, is not seen: the world holds the line where it last saw it.)
-  CHECK_FALSE(readback.read().enabled);
+  // The motor's destructor stops it: the PWM at duty 0, enabled, its pin inactive. (Its enable line's low level,
+  // driven for less than the time between two reads before it is released, is not seen: the world holds the line
+  // where it last saw it, asserted; so the PWM's inactive level alone is what stops the driver here.)
+  CHECK(readback.read().duty == 0.0);
   CHECK(readback.read().torque_nm == 0.0);
 }
 

@@ -69,7 +69,7 @@ TEST_CASE("the torque the board's motor commands is read back within one duty qu
   const double quantum = kFullDutyNm / config.period_ns;
 
   CHECK(readback.read().torque_nm == 0.0);
-  CHECK_FALSE(readback.read().enabled);
+  CHECK(readback.read().duty == 0.0);  // open() leaves the PWM enabled at duty 0: the driver's input inactive
   for (const double torque : {0.001, 0.1, 0.3333, 0.6, 1.1, 1.2}) {
     CAPTURE(torque);
     motor.command({torque, true});
@@ -81,7 +81,7 @@ TEST_CASE("the torque the board's motor commands is read back within one duty qu
   }
   motor.command({0.5, false});
   CHECK(readback.read().torque_nm == 0.0);
-  CHECK_FALSE(readback.read().enabled);
+  CHECK(readback.read().duty == 0.0);
   motor.command({-0.5, true});  // positive_torque_only: nothing
   CHECK(readback.read().torque_nm == 0.0);
   motor.command({0.7, true});
@@ -99,6 +99,25 @@ TEST_CASE("a polarity the board does not undo reads as the complement of the dut
   PwmMotor motor = opened(PwmMotor::open(wrong));
   motor.command({0.3, true});
   CHECK(readback.read().torque_nm == Approx(kFullDutyNm - 0.3).margin(kFullDutyNm / config.period_ns));
+}
+
+// The kernel leaves a disabled PWM's output undefined; the tree's pin does the worst a controller does (stops in
+// the high part of its period), so a program that takes "enable 0" for off is seen driving the motor.
+TEST_CASE("a PWM disabled while its pin was high holds it high: torque at the driver, unless the board inverts it") {
+  TempDir dir;
+  PwmMotorConfig config = config_in(dir.path());
+  config.pwm_inversed = GENERATE(false, true);
+  CAPTURE(config.pwm_inversed);
+  MotorReadback readback = opened(MotorReadback::open(config));
+  PwmMotor motor = opened(PwmMotor::open(config));
+  const std::string channel = config.sysfs_root + "/class/pwm/pwmchip2/pwm1";
+  motor.command({0.3, true});
+  REQUIRE(readback.read().torque_nm == Approx(0.3).margin(kFullDutyNm / config.period_ns));
+  std::ofstream(channel + "/enable") << "0\n";  // disabled at duty 0.3: the pin was high for part of a period
+  // Normal polarity: held high, full duty at the driver. Inversed: the pin was high too (for the other 0.7), held
+  // high, and the board turns that into none.
+  CHECK(readback.read().torque_nm == Approx(config.pwm_inversed ? 0.0 : kFullDutyNm));
+  CHECK(readback.read().duty == Approx(config.pwm_inversed ? 0.0 : 1.0));
 }
 
 TEST_CASE("the tree is kept across a readback's restart, so a running program stays connected") {

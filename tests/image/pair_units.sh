@@ -28,7 +28,8 @@ systemctl stop lever-fw@hsi lever-fw@top
 for role in hsi top; do
   check "systemctl stop lever-fw@$role: it exited 0 ($(unit_result "$role"))" \
     test "$(unit_result "$role")" = "success 0"
-  check "and its motor is disabled at zero duty: $(pwm_state $role)" test "$(pwm_state $role)" = "0 0"
-  check "and so is its controller: $(pwm_hw $role)" test "$(pwm_hw $role | cut -d' ' -f1,3)" = "0 0"
+  check "and its motor is at zero duty, enabled (the inactive state): $(pwm_state $role)" test "$(pwm_state $role)" = "1 0"
+  check "and its controller's pin gives the driver no duty: $(pwm_hw $role)" \
+    pin_inactive "$role" "$(pwm_hw $role | cut -d' ' -f7)"
 done
 finish "the pair under systemd on the board image"

@@ -61,7 +61,7 @@ check "the TOP's guard runs with them: $(journalctl -u lever-fw@top -o cat | gre
 
 # 0. A process spinning at the loops' own priority on the one CPU, 100 ms by its own clock.
 poll_rt on
-check "before the spin: both motors on" eval 'motor_on hsi && motor_on top'
+check "before the spin: both motors on" until_on 5 hsi top
 spin_and_time "a FIFO 80 process spins 100 ms: its guard" "$guard_ms"
 poll_rt off
 check "and the TOP's guard says so" wait_until 10 journal_has top "loop has not stepped for"
@@ -75,7 +75,7 @@ fi
 # 1. The loop hung: the process stopped, as a loop stuck in a step would look to the feeder.
 pid=$top_pid
 poll_rt on
-check "before SIGSTOP: the TOP's motor on" motor_on top
+check "before SIGSTOP: the TOP's motor on" until_on 5 top
 clock_now
 t0=$now
 kill -STOP "$top_pid"
@@ -92,13 +92,14 @@ rehome "restarted after the watchdog"
 # 2. SIGKILL: nothing of lever-fw runs; its motor guard holds the enable line's request and the PWM's files.
 pid=$top_pid
 poll_rt on
-check "before SIGKILL: the TOP's motor on" motor_on top
+check "before SIGKILL: the TOP's motor on" until_on 5 top
 clock_now
 t0=$now
 kill -KILL "$top_pid"
 time_to "TOP killed (SIGKILL): its motor guard, motor off" 0 2.4 "$t0" motor_off top
 poll_rt off
 check "ExecStopPost's lever-fw --motor-off ran and exited 0" wait_until 10 stop_post_ok top
+check "and the TOP's PWM pin is at its inactive level (duty 0, enabled): $(pwm_hw top)" pwm_inactive top
 applied_since top "$t0"
 require "Restart=on-failure: lever-fw@top runs again" wait_until $((restart_s + 30)) restarted top "$pid"
 main_pid top
@@ -111,7 +112,7 @@ guard_pid=''
 read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
 require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
 poll_rt on
-check "before its guard is killed: the TOP's motor on" motor_on top
+check "before its guard is killed: the TOP's motor on" until_on 5 top
 clock_now
 t0=$now
 kill -KILL "$guard_pid"

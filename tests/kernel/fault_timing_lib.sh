@@ -6,9 +6,11 @@
 # virtual time (-rtc clock=vm) the guest's realtime clock runs with its monotonic one.
 clock_now() { now=${EPOCHREALTIME/./}; }
 # mono_offset: CLOCK_MONOTONIC less $EPOCHREALTIME, in microseconds (to put the controllers' stamps on the test's
-# clock), read once: /proc/timer_list's "now at" between two clock_now
+# clock), read once: /proc/timer_list's "now at" between two clock_now. Also has pin_inactive read, now rather than
+# in a timed poll, which levers' boards invert their PWM.
 mono_offset() {
-  local line a b
+  local line a b role
+  for role in hsi top; do [[ -r $work/$role.toml ]] && { pin_inactive "$role" 0 || :; }; done
   clock_now
   a=$now
   while read -r line; do [[ $line == "now at "* ]] && break; done </proc/timer_list
@@ -19,37 +21,41 @@ mono_offset() {
   echo "CLOCK_MONOTONIC - realtime: $offset_us us (+-$(((b - a) / 2)) us)"
 }
 # applied_since ROLE T0: the states the lever's controller was programmed with since T0 (clock_now), as
-# "+ms enabled period duty"
+# "+ms enabled period duty pin"
 applied_since() {
-  local n t e p d
-  while read -r n t e p d; do
-    ((t / 1000 - offset_us >= $2)) && echo "  +$(ms_since "$2" $((t / 1000 - offset_us))) ms: enabled $e period $p duty $d"
+  local n t e p d pin
+  while read -r n t e p d pin; do
+    ((t / 1000 - offset_us >= $2)) &&
+      echo "  +$(ms_since "$2" $((t / 1000 - offset_us))) ms: enabled $e period $p duty $d, pin high ${pin} ppm"
   done <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/apply_log"
 }
-# off_stamp ROLE T0: $stamp, the time (clock_now's clock) of the first state since T0 the lever's controller was
-# programmed with that stops the motor (disabled); empty when there is none in its log
+# off_stamp ROLE T0: $stamp, the time (clock_now's clock) of the state since T0 the lever's controller was
+# programmed with from which its pin has given the driver no duty (the first of the last such run: a duty that
+# passed through 0 before is not the stop); empty when there is none in its log
 off_stamp() {
-  local n t e p d
+  local n t e p d pin
   stamp=''
-  while read -r n t e p d; do
-    ((t / 1000 - offset_us >= $2)) && [[ $e == 0 ]] && { stamp=$((t / 1000 - offset_us)); return; }
+  while read -r n t e p d pin; do
+    ((t / 1000 - offset_us >= $2)) || continue
+    if pin_inactive "$1" "$pin"; then
+      [[ -n $stamp ]] || stamp=$((t / 1000 - offset_us))
+    else
+      stamp=''
+    fi
   done <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/apply_log"
 }
 ms_since() { awk -v d=$(($2 - $1)) 'BEGIN { printf "%.2f", d / 1e3 }'; }  # ms_since T0 T1: (T1 - T0) in ms
-# motor_off ROLE: its controller disabled or its driver's enable line (MOTOR_EN, line 2) low. lever-fw stops a
-# motor with both (PwmMotor's release); a held lever is enabled, even at a duty that rounds to 0.
-motor_off() {
-  local enabled period duty rest value=1
-  read -r enabled period duty rest <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" || return 1
-  local gpio=${1}_gpio
-  [[ -r ${!gpio}/sim_gpio2/value ]] && read -r value <"${!gpio}/sim_gpio2/value"
-  [[ $enabled == 0 || $value == 0 ]]
-}
-# pwm_disabled ROLE: its PWM controller disabled (what a process must write: the kernel keeps a dead writer's
-# state), whatever the enable line does
-pwm_disabled() {
-  local enabled rest
-  read -r enabled rest <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" && [[ $enabled == 0 ]]
+# motor_off ROLE: no torque at the lever's driver, read from the hardware's outputs (no_torque: its PWM pin gives
+# the driver no duty, or its enable line is low). lever-fw stops a motor with both (PwmMotor's release: the line,
+# then duty 0 with the PWM enabled). Never the controller's enabled flag: a disabled PWM's pin may hold high. A held
+# lever at a duty that rounds to 0 reads off too: no torque is no torque.
+motor_off() { no_torque "$1"; }
+# pwm_inactive ROLE: its PWM pin gives the driver no duty (what a process must write, since the kernel keeps a dead
+# writer's state: duty 0 with the channel enabled), whatever the enable line does
+pwm_inactive() {
+  local enabled period duty polarity applies last pin
+  read -r enabled period duty polarity applies last pin <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" &&
+    pin_inactive "$1" "$pin"
 }
 # enable_low ROLE: the lever's driver enable line (MOTOR_EN, line 2) low
 enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 0 ]]; }
@@ -58,21 +64,21 @@ enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/va
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }
 # time_to NAME MIN_MS MAX_MS T0 CONDITION...: waits (polling each 0.2 ms of guest time, up to 5 s) until the
 # condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`
-# and `pwm_disabled ROLE` the time is the controller's own stamp of the state that stopped the motor (apply_log);
+# and `pwm_inactive ROLE` the time is the controller's own stamp of the state that stopped the motor (apply_log);
 # when the motor stopped by its driver's enable line instead (no stamp), or for any other condition, it is the
 # first poll that saw it.
 time_to() {
   local name=$1 min=$2 max=$3 t0=$4
   shift 4
   local deadline=$((t0 + 5000000)) how=polled every=0.0002
-  [[ $1 == motor_off || $1 == pwm_disabled ]] && every=0.002  # stamped: the polls only wait
+  [[ $1 == motor_off || $1 == pwm_inactive ]] && every=0.002  # stamped: the polls only wait
   while ! "$@"; do
     clock_now
     ((now < deadline)) || { check "$name: not reached within 5 s (bound $max ms)" false; return; }
     read -rt "$every" -u "$never_ready" || :
   done
   clock_now
-  if [[ $1 == motor_off || $1 == pwm_disabled ]]; then
+  if [[ $1 == motor_off || $1 == pwm_inactive ]]; then
     off_stamp "$2" "$t0"
     [[ -n $stamp ]] && now=$stamp how="the controller's stamp"
   fi
@@ -112,10 +118,25 @@ rehome() {
   rearm "$1, homed"
 }
 
-# motor_on ROLE: the lever drives its motor at this moment: its driver's enable line (MOTOR_EN, line 2) high, which
-# PwmMotor raises only while it commands torque. Checked just before each fault, so that a lever already safe
-# (disarmed, faulted) cannot pass a time-to-safe check it never had to meet.
-motor_on() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 1 ]]; }
+# motor_on ROLE: the lever drives torque at this moment, read from the hardware (not no_torque: its driver enabled
+# and its PWM pin active); driver_on ROLE: its driver enabled (the enable line high), for the cases timed by that
+# line. Checked just before each fault, so that a lever already safe (disarmed, faulted, at zero duty) cannot pass a
+# time-to-safe check it never had to meet.
+motor_on() { ! no_torque "$1"; }
+driver_on() { ! enable_low "$1"; }
+# until_on SECONDS ROLE...: polls every 0.2 ms until each lever named drives torque (motor_on) at the same moment,
+# for up to SECONDS: the HSI shows no force in free space, so only while the operator presses the wall
+until_on() {
+  local deadline=$((SECONDS + $1)) role all
+  shift
+  while ((SECONDS < deadline)); do
+    all=1
+    for role in "$@"; do motor_on "$role" || { all=0; break; }; done
+    ((all)) && return 0
+    read -rt 0.0002 -u "$never_ready" || :
+  done
+  return 1
+}
 
 # spin_and_time NAME MAX_MS: a process at SCHED_FIFO 80, the loops' own priority, spins 100 ms by its own clock on
 # this one CPU, while this shell, at SCHED_FIFO 99 above everything, polls both levers' motors every 0.2 ms (a few

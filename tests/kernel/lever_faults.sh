@@ -7,8 +7,9 @@
 #   and its motor stopped by `lever-fw --motor-off` (its configuration cut in half meanwhile), as the service's
 #   ExecStopPost does; the TOP's PWM channel
 #   unexported under it; the HSI's gpio-sim chip removed.
-# The safe state, read from the devices: the HSI's motor off (its PWM controller disabled or at duty 0, or its
-# driver's enable line low); for the TOP the same, and where its rule is to hold for safe_hold_ms first, no sooner.
+# The safe state, read from the devices' outputs: the HSI's motor off (its PWM pin giving the driver no duty, or its
+# driver's enable line low; never the controller's enabled flag, since the rig's controller holds a disabled pin
+# where it was); for the TOP the same, and where its rule is to hold for safe_hold_ms first, no sooner.
 # After each fault that a re-arm can clear, the pair is re-armed and the next one comes.
 # usage: lever_faults.sh BIN_DIR
 set -uo pipefail
@@ -75,7 +76,7 @@ check "TOP stopped for $(ms_since 0 "$stopped_us") ms: no TIMING, the TOP stays 
 guard_deadline_ms=10 guard_check_ms=2
 for stop_ms in 4 20 50; do
   poll_rt on
-  check "before the ${stop_ms} ms stop: the TOP's motor on" motor_on top
+  check "before the ${stop_ms} ms stop: the TOP's motor on" until_on 5 top
   stop_top "0.0$(printf '%02d' "$stop_ms")"
   stop=$(ms_since 0 "$stopped_us")
   require "a stop longer than fault_after_ms: $stop ms" awk -v s="$stop" -v b="$fault_after_ms" 'BEGIN { exit !(s > b) }'
@@ -94,16 +95,18 @@ for stop_ms in 4 20 50; do
 done
 
 # 2. The CAN interface down for half a second: both levers hear nothing. The HSI stops its motor; the TOP holds
-# where it was for safe_hold_ms, then lets go (so its motor stops no sooner than that).
+# where it was for safe_hold_ms, then lets go (so its motor stops no sooner than that). The TOP's end of the hold is
+# its driver's enable line going low: a hold may sit at duty 0 (no torque at the pin, seen at 216.7 ms into a
+# 500 ms hold), which motor_off rightly reads as no torque, and then the release writes no new PWM state at all.
 hold_ms=$(key top safety safe_hold_ms)
 poll_rt on
-check "before vcan0 down: both motors on" eval 'motor_on hsi && motor_on top'
+check "before vcan0 down: the HSI's motor on, the TOP's driver on" eval 'until_on 5 hsi && driver_on top'
 clock_now
 t0=$now
 ip link set vcan0 down
 time_to "vcan0 down: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
-time_to "vcan0 down: the TOP holds, then its motor off" "$hold_ms" $((comms_ms + hold_ms + 2 * tick_ms)) "$t0" \
-  motor_off top
+time_to "vcan0 down: the TOP holds, then releases its driver" "$hold_ms" $((comms_ms + hold_ms + 2 * tick_ms)) "$t0" \
+  enable_low top
 poll_rt off
 ip link set vcan0 up
 check "vcan0 down: the HSI latched COMMS" wait_for 5 hsi '.faults | index("comms_timeout") != null'
@@ -118,16 +121,17 @@ rearm "vcan0 down and up"
 #   + stale_ms + 1: stale once a sample is older than stale_ms whole ticks (strain_gauge.hpp: now - last > stale);
 #   + 1: its age is floored to whole ticks (gauge_port.hpp), so its tick is rounded up by up to one;
 #   + hold_ms: the TOP holds that long from the tick it latched FORCE_STALE, then commands zero torque;
-#   + 1: that step's wake lateness and its PWM write, before the controller stamps the state, within a period.
+#   + 1: that step's wake lateness and its write of the enable line low (its release), within a period;
+#   + 0.2: this shell's poll of the line (a line has no stamp), every 0.2 ms at SCHED_FIFO 50.
 # No sooner than hold_ms: a sample is at most poll_us + timeout_us (15 ms) older than the stamp, well inside stale_ms.
 poll_rt on
-check "before the gauge server goes: the TOP's motor on" motor_on top
+check "before the gauge server goes: the TOP's driver on" driver_on top
 kill -USR1 "$serve_pid"
 require "serve stopped the gauge" wait_for_serve faults "gauge stopped (CLOCK_MONOTONIC"
 closed_ns=$(sed -n 's/.*gauge stopped (CLOCK_MONOTONIC \([0-9]*\) ns).*/\1/p' "$out/faults.serve" | tail -n 1)
 t0=$((closed_ns / 1000 - offset_us))
-time_to "gauge server gone: the TOP holds, then its motor off" "$hold_ms" $((stale_ms + 1 + 1 + hold_ms + 1)) "$t0" \
-  motor_off top
+time_to "gauge server gone: the TOP holds, then releases its driver" "$hold_ms" \
+  "$(awk -v s="$stale_ms" -v h="$hold_ms" 'BEGIN { print s + 1 + 1 + h + 1 + 0.2 }')" "$t0" enable_low top
 poll_rt off
 check "gauge server gone: the TOP latched FORCE_STALE" wait_for 5 top '.faults | index("force_stale") != null'
 kill -USR2 "$serve_pid"
@@ -147,7 +151,7 @@ rearm "gauge server back"
 cp "$work/top.toml" "$work/top.toml.whole"
 head -c "$(($(wc -c <"$work/top.toml") / 2))" "$work/top.toml.whole" >"$work/top.toml"
 poll_rt on
-check "before SIGKILL: both motors on" eval 'motor_on hsi && motor_on top'
+check "before SIGKILL: both motors on" until_on 5 hsi top
 clock_now
 t0=$now
 kill -KILL "$top_pid"
@@ -155,6 +159,7 @@ time_to "TOP killed: its guard stops its motor" 0 2.4 "$t0" motor_off top
 wait "$top_pid" 2>/dev/null  # reaped: systemd runs ExecStopPost after that
 lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
 motor_off_code=$?
+check "and after it the TOP's PWM pin is at its inactive level (duty 0, enabled): $(pwm_hw top)" pwm_inactive top
 time_to "TOP killed: HSI motor off" 0 $((comms_ms + 2 * tick_ms)) "$t0" motor_off hsi
 poll_rt off
 check "lever-fw --motor-off on a configuration cut in half: exit 0 (got $motor_off_code)" test "$motor_off_code" -eq 0
@@ -175,7 +180,7 @@ guard_pid=''
 read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
 require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
 poll_rt on
-check "before its guard is killed: the TOP's motor on" motor_on top
+check "before its guard is killed: the TOP's motor on" until_on 5 top
 clock_now
 t0=$now
 kill -KILL "$guard_pid"
@@ -192,7 +197,7 @@ restart_top "after its guard was killed"
 # above, still run: each stops its motor within its deadline, found at its next check, and 1 ms (as for a stop).
 # Without the guards both would stay on until the spin ends and the loops find the gap: 100 ms.
 poll_rt on
-check "before the spin: both motors on" eval 'motor_on hsi && motor_on top'
+check "before the spin: both motors on" until_on 5 hsi top
 spin_and_time "a FIFO 80 process spins 100 ms: its guard" $((guard_deadline_ms + guard_check_ms + 1))
 poll_rt off
 check "and the HSI's guard says so" has_text "$out/hsi.err" "loop has not stepped for"
@@ -212,7 +217,7 @@ fi
 # TOP at rest against the wall holds one duty): so within 10 periods of the unexport, and one more for its phase.
 # Here the TOP is at work and its duty changes within that too; lever_unexport_at_rest.sh is the case at rest.
 poll_rt on
-check "before the unexport: the TOP's motor on" motor_on top
+check "before the unexport: the TOP's driver on" driver_on top
 clock_now
 before=$now
 echo 0 >/sys/class/pwm/pwmchip"$(pwm_chip top)"/unexport
@@ -229,7 +234,7 @@ restart_top "after the unexport: it exports the channel again"
 
 # 6. The HSI's gpio-sim chip removed: its encoder and driver lines are gone.
 poll_rt on
-check "before its chip goes: the HSI's motor on" motor_on hsi
+check "before its chip goes: the HSI's motor on" until_on 5 hsi
 clock_now
 t0=$now
 echo 0 >/sys/kernel/config/gpio-sim/hsi/live

@@ -50,10 +50,11 @@ wait "$hsi_pid"; hsi_code=$?
 wait "$top_pid"; top_code=$?
 check "SIGTERM: lever-fw HSI exits 0 (got $hsi_code)" test "$hsi_code" -eq 0
 check "SIGTERM: lever-fw TOP exits 0 (got $top_code)" test "$top_code" -eq 0
-check "and leaves its motor disabled at zero duty: HSI $(pwm_state hsi)" test "$(pwm_state hsi)" = "0 0"
-check "TOP $(pwm_state top)" test "$(pwm_state top)" = "0 0"
-check "and so do the controllers: HSI $(pwm_hw hsi)" test "$(pwm_hw hsi | cut -d' ' -f1,3)" = "0 0"
-check "TOP $(pwm_hw top)" test "$(pwm_hw top | cut -d' ' -f1,3)" = "0 0"
+# Stopped is duty 0 with the PWM enabled, its inactive state: a disabled PWM's output is undefined.
+check "and leaves its motor at zero duty, enabled: HSI $(pwm_state hsi)" test "$(pwm_state hsi)" = "1 0"
+check "TOP $(pwm_state top)" test "$(pwm_state top)" = "1 0"
+check "and the controllers' pins give the drivers no duty: HSI $(pwm_hw hsi)" pin_inactive hsi "$(pwm_hw hsi | cut -d' ' -f7)"
+check "TOP $(pwm_hw top)" pin_inactive top "$(pwm_hw top | cut -d' ' -f7)"
 
 sleep 0.5
 "$dbc_decode" --summary "$dbc" "$out/one-site.candump" >"$work/decoded"; code=$?

@@ -21,7 +21,7 @@ kill -KILL "$top_pid"
 wait "$top_pid" 2>/dev/null
 check "SIGKILL of the TOP: the HSI faults on its silence" \
   wait_for 20 hsi '.state == "fault" and (.faults | index("comms_timeout") != null)'
-require "and is safe: zero torque" wait_for 10 hsi '.torque_nm == 0'
+require "and is safe: zero torque at its driver (its PWM pin or enable line)" wait_until_true 10 no_torque hsi
 # A killed process cannot stop its motor: the PWM keeps its last duty until something else does (on a board,
 # the service's ExecStopPost). Shown, not asserted: it is the hardware's state, not lever-fw's doing.
 echo "the killed TOP's PWM (enable duty_cycle): $(pwm_state top); its controller: $(pwm_hw top)"

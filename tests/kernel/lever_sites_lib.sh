@@ -242,7 +242,7 @@ check_one_site_run() {
   check_one_site_report "$1"
   check "no encoder edge lost" test "$(last_stat hsi .encoder.lost)/$(last_stat top .encoder.lost)" = 0/0
   for role in hsi top; do
-    read -r hw_enabled hw_period hw_duty hw_polarity hw_applies hw_last_ns <<<"$(pwm_hw $role)"
+    read -r hw_enabled hw_period hw_duty hw_polarity hw_applies hw_last_ns hw_pin <<<"$(pwm_hw $role)"
     check "$role: its PWM controller was programmed through the kernel's PWM core: $hw_applies states, the last one $(pwm_hw $role)" \
       test "$hw_period $hw_polarity" = "50000 normal" -a "$hw_applies" -gt 100
   done
@@ -280,9 +280,41 @@ pwm_state() {
   local dir=/sys/class/pwm/pwmchip$(pwm_chip "$1")/pwm0
   echo "$(cat "$dir/enable") $(cat "$dir/duty_cycle")"
 }
-# pwm_hw ROLE: what the simulated controller was last programmed with, "enabled period duty polarity applies
-# last_apply_ns"
+# pwm_hw ROLE: what the simulated controller was last programmed with, and what its pin puts out: "enabled period
+# duty polarity applies last_apply_ns pin_ppm"
 pwm_hw() { cat "/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state"; }
+# pin_inactive ROLE PIN_PPM: a pin putting out PIN_PPM (the controller's pin_ppm: millionths of a period high)
+# gives the lever's driver no duty: low all the time, or high all the time when the board inverts it on its way
+# ([board.motor] pwm_inversed of $work/ROLE.toml, read once: a fork in a timed poll costs milliseconds of guest
+# time). The pin's output, never the controller's enabled flag: a disabled PWM's output is undefined, and the
+# rig's controller holds it where it was (tools/kernel-rig/README.md, "Simulated PWM").
+pin_inactive() {
+  local inverted=inverted_$1
+  if [[ -z ${!inverted:-} ]]; then
+    printf -v "$inverted" '%s' "$(awk '/^\[/ { s = ($1 == "[board.motor]") } s && $1 == "pwm_inversed" { v = $3 }
+      END { print (v == "true" ? "true" : "false") }' "$work/$1.toml")"
+  fi
+  if [[ ${!inverted} == true ]]; then [[ $2 == 1000000 ]]; else [[ $2 == 0 ]]; fi
+}
+# wait_until_true SECONDS COMMAND...: until the command succeeds (guest time), polling every 10 ms
+wait_until_true() {
+  local deadline=$((SECONDS + $1))
+  shift
+  until "$@"; do
+    ((SECONDS < deadline)) || { echo "timed out waiting for: $*" >&2; return 1; }
+    sleep 0.01
+  done
+}
+# no_torque ROLE: the lever's driver makes no torque, read from the hardware's outputs: its PWM pin gives it no duty
+# (pin_inactive), or its enable line (MOTOR_EN, line 2) is low. Neither the controller's enabled flag nor the
+# lever's own telemetry.
+no_torque() {
+  local enabled period duty polarity applies last pin value=1 gpio=${1}_gpio
+  read -r enabled period duty polarity applies last pin <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" ||
+    return 1
+  [[ -r ${!gpio}/sim_gpio2/value ]] && read -r value <"${!gpio}/sim_gpio2/value"
+  pin_inactive "$1" "$pin" || [[ $value == 0 ]]
+}
 
 stop_all() {
   local p

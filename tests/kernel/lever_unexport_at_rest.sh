@@ -25,12 +25,12 @@ tick_ms=1  # the loop's period, 1 kHz
 mono_offset
 
 # held MS: the HSI's controller programmed with nothing new for the last MS ms (its own stamp of its last state),
-# enabled, and its driver enabled
+# and its driver enabled (its enable line high; the PWM is enabled whether it drives or not)
 held() {
-  local enabled period duty polarity applies last_ns
-  read -r enabled period duty polarity applies last_ns < <(pwm_hw hsi)
+  local enabled period duty polarity applies last_ns pin
+  read -r enabled period duty polarity applies last_ns pin < <(pwm_hw hsi)
   clock_now
-  [[ $enabled == 1 ]] && ! enable_low hsi && ((now - (last_ns / 1000 - offset_us) >= $1 * 1000))
+  ! enable_low hsi && ((now - (last_ns / 1000 - offset_us) >= $1 * 1000))
 }
 wait_held() {
   local deadline=$((SECONDS + 30))

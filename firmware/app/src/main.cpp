@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   app.add_flag("--check-config", check_config, "validate the configuration and print it, touching no hardware");
   app.add_flag("--stats-json", stats_json, "one JSON status object per line, once a second");
   app.add_flag("--motor-off", motor_off,
-               "stop the board's motor (PWM disabled at duty 0, driver enable line off) and exit: for the service "
+               "stop the board's motor (PWM at duty 0 and enabled, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
       ->excludes("--check-config");
   app.add_option("--motor-state", motor_state,

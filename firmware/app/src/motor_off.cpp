@@ -29,7 +29,7 @@ int stop(const platform::PwmMotorConfig& config, const std::string& named_by) {
     fmt::print(stderr, "lever-fw: --motor-off: cannot stop the motor {} names: {}\n", named_by, motor.error().message);
     return kNotStopped;
   }
-  fmt::print(stderr, "lever-fw: --motor-off: {} (named by {}): PWM disabled at duty 0, enable line off\n",
+  fmt::print(stderr, "lever-fw: --motor-off: {} (named by {}): PWM at duty 0 (enabled: the inactive level), enable line off\n",
              motor.value().description(), named_by);
   return kStopped;
 }

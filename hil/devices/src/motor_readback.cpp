@@ -82,6 +82,9 @@ struct MotorReadback::Impl {
   double full_duty_nm = 0.0;
   std::string description;
 
+  // The PWM pin's output: the fraction of each period it is high. From the controller, its own; from the tree,
+  // worked out as a controller would put it out (pin_from_tree).
+  double pin_high = 0.0;
   // As last read, for a read that fails.
   std::uint64_t enable_value = 0;
   std::uint64_t duty_ns = 0;
@@ -128,8 +131,22 @@ struct MotorReadback::Impl {
       duty_ns = out->duty_ns;
       period_ns = out->period_ns;
       inversed = out->inversed;
+      pin_high = static_cast<double>(out->pin_ppm) / kPinFullPpm;
     } else {
       ++read_errors;
+    }
+  }
+  // The tree has no controller behind it: its pin is what the rig's lever-pwm-sim in its default mode would put
+  // out. Enabled, high for duty/period (the rest of it inversed); disabled, where the kernel leaves the output
+  // undefined, the worst a controller does: stopped in the high part of a period if there was one, so that a
+  // program taking "disabled" for "off" is seen.
+  void pin_from_tree() noexcept {
+    if (enable_value == 1) {
+      const double high =
+          period_ns > 0 ? std::min(static_cast<double>(duty_ns) / static_cast<double>(period_ns), 1.0) : 0.0;
+      pin_high = inversed ? 1.0 - high : high;
+    } else if (pin_high > 0.0) {
+      pin_high = 1.0;
     }
   }
   void read_tree() noexcept {
@@ -142,6 +159,7 @@ struct MotorReadback::Impl {
       take(read_unsigned(period.get()), period_ns);
       take(read_inversed(polarity.get()), inversed);
     }
+    pin_from_tree();
   }
   void take_line(std::optional<Line>& line, bool& asserted) noexcept {
     if (!line) return;
@@ -221,12 +239,11 @@ MotorReading MotorReadback::read() noexcept {
   s.take_line(s.direction_line, s.direction_asserted);
 
   MotorReading r;
-  if (s.period_ns > 0) {
-    r.duty = std::min(static_cast<double>(s.duty_ns) / static_cast<double>(s.period_ns), 1.0);
-    // The board's inverter undoes the polarity PwmMotor writes for it; a mismatch shows as the complement.
-    if (s.inversed != s.board_inverts) r.duty = 1.0 - r.duty;
-  }
-  r.enabled = s.enable_value == 1 && (!s.enable_line || s.enable_line_asserted);
+  // The torque comes from what reaches the driver, never from the PWM's enable flag: a disabled PWM's pin may
+  // hold high. The board's inverter (pwm_inversed) turns the pin over on its way, undoing the polarity PwmMotor
+  // writes for it; a mismatch shows as the complement.
+  r.duty = s.board_inverts ? 1.0 - s.pin_high : s.pin_high;
+  r.enabled = !s.enable_line || s.enable_line_asserted;
   r.negative = s.direction_line && s.direction_asserted;
   if (r.enabled) r.torque_nm = (r.negative ? -1.0 : 1.0) * r.duty * s.full_duty_nm;
   return r;

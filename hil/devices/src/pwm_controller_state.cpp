@@ -49,7 +49,7 @@ std::optional<PwmOutput> PwmControllerState::read() const noexcept {
   char buffer[96];
   const ssize_t got = ::pread(fd_.get(), buffer, sizeof buffer, 0);
   if (got <= 0) return std::nullopt;
-  // "enabled period_ns duty_ns polarity applies last_apply_ns\n"
+  // "enabled period_ns duty_ns polarity applies last_apply_ns pin_ppm\n"
   const std::string_view text(buffer, static_cast<std::size_t>(got));
   std::size_t at = 0;
   const auto enabled = next_number(text, at);
@@ -57,7 +57,7 @@ std::optional<PwmOutput> PwmControllerState::read() const noexcept {
   const auto duty = next_number(text, at);
   if (!enabled || !period || !duty || *enabled > 1) return std::nullopt;
   const std::string_view rest = text.substr(at);
-  PwmOutput out{*enabled == 1, *period, *duty, false, 0, 0};
+  PwmOutput out{*enabled == 1, *period, *duty, false, 0, 0, 0};
   if (rest.starts_with("inversed ")) {
     out.inversed = true;
   } else if (!rest.starts_with("normal ")) {
@@ -66,9 +66,11 @@ std::optional<PwmOutput> PwmControllerState::read() const noexcept {
   at += rest.find(' ') + 1;
   const auto applies = next_number(text, at);
   const auto last = next_number(text, at);
-  if (!applies || !last) return std::nullopt;
+  const auto pin = next_number(text, at);
+  if (!applies || !last || !pin || *pin > kPinFullPpm) return std::nullopt;
   out.applies = *applies;
   out.last_apply_ns = static_cast<std::int64_t>(*last);
+  out.pin_ppm = static_cast<std::uint32_t>(*pin);
   return out;
 }
 
@@ -93,8 +95,10 @@ std::vector<PwmApplied> PwmControllerState::apply_log() const {
     const auto enabled = next_number(line, at);
     const auto period = next_number(line, at);
     const auto duty = next_number(line, at);
-    if (!number || !time || !enabled || !period || !duty) return {};
-    log.push_back({*number, static_cast<std::int64_t>(*time), *enabled == 1, *period, *duty});
+    const auto pin = next_number(line, at);
+    if (!number || !time || !enabled || !period || !duty || !pin || *pin > kPinFullPpm) return {};
+    log.push_back({*number, static_cast<std::int64_t>(*time), *enabled == 1, *period, *duty,
+                   static_cast<std::uint32_t>(*pin)});
   }
   return log;
 }

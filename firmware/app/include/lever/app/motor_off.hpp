@@ -21,11 +21,11 @@ namespace lever::app {
 // other problem said on stderr), but only when every key that says which hardware it is is there (the PWM chip
 // and channel, the three lines, the lines' chip when one is named); otherwise exit 1, nothing stopped.
 //
-// A stop is an open of the motor: the PWM disabled at duty 0 (written before anything else, so a GPIO line that
-// cannot be had does not keep the PWM running), then the enable and direction lines requested deasserted;
-// closing it leaves them so. Returns the process's exit code: 0 the motor was stopped (or, under the unit, this
-// run had none), 1 it could not be or none was named, the reason on stderr; the PWM writes that went through
-// stand.
+// A stop is an open of the motor: the PWM at duty 0, left enabled there, its inactive level (written before
+// anything else, so a GPIO line that cannot be had does not keep the PWM running), then the enable and direction
+// lines requested deasserted; closing it leaves them so. Returns the process's exit code: 0 the motor was stopped
+// (or, under the unit, this run had none), 1 it could not be or none was named, the reason on stderr; the PWM
+// writes that went through stand.
 int motor_off(const std::string& config_path, const std::string& state_path);
 
 }  // namespace lever::app

@@ -19,9 +19,11 @@ struct MotorReading {
   // The driver's torque: duty * full_scale_current_a * torque_constant_nm_per_a * gear_ratio (the inverse of
   // platform's TorqueToDuty), negative when the direction line is asserted; 0 unless `enabled`.
   double torque_nm = 0.0;
-  bool enabled = false;   // PWM enable is 1, and the enable line is asserted (when one is configured)
-  double duty = 0.0;      // the fraction of the period the driver sees: duty_cycle / period, 1 - that when the
-                          // polarity written differs from the board's inversion (pwm_inversed); 0 at period 0
+  bool enabled = false;   // the driver's enable line asserted (always, without one); the PWM's enable flag is not
+                          // asked: a disabled PWM's pin is undefined, and may hold high
+  double duty = 0.0;      // the fraction of the period the driver's input is high: the PWM pin's output (enabled,
+                          // duty_cycle / period, 1 - that inversed; disabled, held high if it was high at all),
+                          // turned over when the board inverts it (pwm_inversed)
   bool negative = false;  // the direction line asserted (false without one)
 };
 

@@ -1,7 +1,8 @@
 #pragma once
 // A PWM controller of the kernel rig (lever-pwm-sim, tools/kernel-rig/pwm-sim): what the kernel's PWM core last
-// programmed it with, read from its hw_state attribute. That is what the board's PWM pin would put out: it
-// holds when the channel is unexported or its program dies, as a real PWM block keeps running.
+// programmed it with, and what its pin puts out under that, read from its hw_state attribute. The pin holds when
+// the channel is unexported or its program dies, as a real PWM block keeps running; disabled, it does what the
+// module's disabled_output makes it do (the kernel leaves a disabled PWM's output undefined).
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -19,7 +20,10 @@ struct PwmOutput {
   bool inversed = false;
   std::uint64_t applies = 0;       // states the controller was programmed with since it was made
   std::int64_t last_apply_ns = 0;  // CLOCK_MONOTONIC of the newest
+  std::uint32_t pin_ppm = 0;       // the pin's output: millionths of each period it is high
 };
+
+inline constexpr std::uint32_t kPinFullPpm = 1'000'000;  // pin_ppm of a pin high all the time
 
 // One state the controller was programmed with (its apply_log).
 struct PwmApplied {
@@ -28,6 +32,7 @@ struct PwmApplied {
   bool enabled = false;
   std::uint64_t period_ns = 0;
   std::uint64_t duty_ns = 0;
+  std::uint32_t pin_ppm = 0;  // the pin's output under it
 };
 
 class PwmControllerState {
