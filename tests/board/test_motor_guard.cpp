@@ -18,37 +18,16 @@
 #include "lever/platform/motor_guard.hpp"
 #include "lever/platform/pwm_motor.hpp"
 #include "pwm_sysfs_tree.hpp"
+#include "pwm_test_motor.hpp"
 
 using lever::platform::MotorGuard;
 using lever::platform::MotorGuardConfig;
 using lever::platform::PwmMotor;
-using lever::platform::PwmMotorConfig;
+using lever::test::driving_motor;
 using lever::test::PwmSysfsTree;
 using lever::test::wait_status_of_child;
 
 namespace {
-
-PwmMotorConfig config_for(const PwmSysfsTree& tree) {
-  PwmMotorConfig c;
-  c.sysfs_root = tree.root();
-  c.pwm_chip = 3;
-  c.pwm_channel = 0;
-  c.period_ns = 50'000;
-  c.torque_constant_nm_per_a = 0.05;
-  c.gear_ratio = 10.0;
-  c.full_scale_current_a = 2.0;
-  c.positive_torque_only = true;
-  return c;
-}
-
-// The lever's side: a motor driving 0.3 Nm (duty 15000 of 50000). Exit codes 90-91: it did not drive.
-PwmMotor driving_motor(const PwmSysfsTree& tree) {
-  auto motor = PwmMotor::open(config_for(tree));
-  if (!motor) ::_exit(90);
-  motor.value().command({0.3, true});
-  if (tree.read("duty_cycle") != "15000" || tree.read("enable") != "1") ::_exit(91);
-  return std::move(motor).value();
-}
 
 MotorGuardConfig guard_config(std::chrono::milliseconds deadline) {
   MotorGuardConfig c;
@@ -75,7 +54,7 @@ bool within_5_s(F&& condition) {
 }  // namespace
 
 TEST_CASE("MotorGuard: a loop that stops stepping has its motor put in the inactive state, and is told", "[guard]") {
-  PwmSysfsTree tree(3, 0);
+  PwmSysfsTree tree(lever::test::kPwmTestChip, lever::test::kPwmTestChannel);
   const int status = wait_status_of_child([&] {
     PwmMotor motor = driving_motor(tree);
     // 200 ms: far above this loop's 1 ms sleeps, however busy the machine, so only the stop below can trip it.
@@ -99,7 +78,7 @@ TEST_CASE("MotorGuard: a loop that stops stepping has its motor put in the inact
 }
 
 TEST_CASE("MotorGuard: a lever killed has its motor put in the inactive state by its guard", "[guard]") {
-  PwmSysfsTree tree(3, 0);
+  PwmSysfsTree tree(lever::test::kPwmTestChip, lever::test::kPwmTestChannel);
   int ready[2];
   REQUIRE(::pipe(ready) == 0);
   std::fflush(nullptr);
@@ -131,7 +110,7 @@ TEST_CASE("MotorGuard: a lever killed has its motor put in the inactive state by
 }
 
 TEST_CASE("MotorGuard: a guard killed has the lever stop its motor itself and say so", "[guard]") {
-  PwmSysfsTree tree(3, 0);
+  PwmSysfsTree tree(lever::test::kPwmTestChip, lever::test::kPwmTestChannel);
   const int status = wait_status_of_child([&] {
     PwmMotor motor = driving_motor(tree);
     auto guard = MotorGuard::start(guard_config(std::chrono::milliseconds(10'000)), motor.guard_handles());
@@ -152,9 +131,9 @@ TEST_CASE("MotorGuard: the guard program refuses a spec it cannot read, and a pr
           "[guard]") {
   CHECK(lever::platform::run_motor_guard("lever=1") == 2);
   CHECK(lever::platform::run_motor_guard("duty=3,enable=4,nonsense") == 2);
-  PwmSysfsTree tree(3, 0);
+  PwmSysfsTree tree(lever::test::kPwmTestChip, lever::test::kPwmTestChannel);
   const int status = wait_status_of_child([&] {
-    auto motor = PwmMotor::open(config_for(tree));
+    auto motor = PwmMotor::open(lever::test::pwm_test_config(tree));
     if (!motor) return 90;
     MotorGuardConfig c = guard_config(std::chrono::milliseconds(100));
     c.program = "/nonexistent/lever-fw";

@@ -20,6 +20,7 @@
 #include "lever/platform/pwm_motor.hpp"
 #include "lever/platform/torque_to_duty.hpp"
 #include "pwm_sysfs_tree.hpp"
+#include "pwm_test_motor.hpp"
 #include "pwrite_pause.hpp"
 
 using lever::fw::MotorCommand;
@@ -28,29 +29,16 @@ using lever::platform::MotorLineConfig;
 using lever::platform::PwmMotor;
 using lever::platform::PwmMotorConfig;
 using lever::platform::TorqueToDuty;
+using lever::test::driving_motor;
 using lever::test::PwmSysfsTree;
 using lever::test::wait_status_of_child;
 
 namespace {
 
-constexpr unsigned kChip = 2;
-constexpr unsigned kChannel = 1;
+constexpr unsigned kChip = lever::test::kPwmTestChip;
+constexpr unsigned kChannel = lever::test::kPwmTestChannel;
 
-// 1 Nm at full duty: the duty in ns is the torque in Nm times the period.
-PwmMotorConfig config_for(const PwmSysfsTree& tree) {
-  PwmMotorConfig c;
-  c.sysfs_root = tree.root();
-  c.pwm_chip = kChip;
-  c.pwm_channel = kChannel;
-  c.period_ns = 50'000;
-  c.torque_constant_nm_per_a = 0.05;
-  c.gear_ratio = 10.0;
-  c.full_scale_current_a = 2.0;
-  c.max_duty = 0.9;
-  c.deadband_nm = 0.01;
-  c.positive_torque_only = true;
-  return c;
-}
+PwmMotorConfig config_for(const PwmSysfsTree& tree) { return lever::test::pwm_test_config(tree); }
 
 PwmMotor open_or_fail(const PwmMotorConfig& config) {
   auto motor = PwmMotor::open(config);
@@ -67,15 +55,6 @@ bool mentions(const std::vector<std::string>& problems, const std::string& text)
 // Stopped is the inactive state: duty 0 with the channel enabled. A disabled channel's output is undefined (the
 // kernel's PWM documentation): some controllers hold the pin where it was, so "enable 0" is not off.
 bool stopped(const PwmSysfsTree& tree) { return tree.read("duty_cycle") == "0" && tree.read("enable") == "1"; }
-
-// In a child: a motor driving 0.3 Nm, so that a stop has something to undo. Exit code 90: it did not drive.
-PwmMotor driving_motor(const PwmSysfsTree& tree) {
-  auto motor = PwmMotor::open(config_for(tree));
-  if (!motor) ::_exit(90);
-  motor.value().command({0.3, true});
-  if (tree.read("duty_cycle") != "15000" || tree.read("enable") != "1") ::_exit(91);
-  return std::move(motor).value();
-}
 
 }  // namespace
 

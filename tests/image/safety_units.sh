@@ -108,16 +108,7 @@ check "restarts so far: 2 ($(unit_value top NRestarts))" test "$(unit_value top 
 rehome "restarted after SIGKILL"
 
 # 3. The TOP's motor guard killed, the third failure within StartLimitIntervalSec: no fourth start.
-guard_pid=''
-read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
-require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
-poll_rt on
-check "before its guard is killed: the TOP's motor on" until_on 5 top
-clock_now
-t0=$now
-kill -KILL "$guard_pid"
-time_to "TOP's motor guard killed: the TOP stops its motor itself" 0 1 "$t0" motor_off top
-poll_rt off
+kill_guard_and_time top "$top_pid"
 check "and says why" wait_until 10 journal_has top "the motor guard (pid $guard_pid) ended"
 sleep $((restart_s + 5))
 # systemd keeps the last failure's Result (signal) and says why it refused the fourth start in the journal.

@@ -176,3 +176,21 @@ spin_and_time() {
     fault_rows+=("| $name: the $role's motor | <= $max | $ms | $how |")
   done
 }
+
+# kill_guard_and_time ROLE LEVER_PID: kills the lever's motor guard (lever-fw's only child; sets $guard_pid) with
+# the lever driving torque, and times lever-fw's own stop of its motor (its SIGCHLD handler). Bound, term by term:
+# the guard's exit, a small process, 0.5 ms; SIGCHLD delivered to lever-fw and its handler run, 0.2 ms; the enable
+# line's ioctl and the PWM's two writes, the last stamped by the controller, 0.3 ms.
+kill_guard_and_time() {
+  local role=$1 lever=$2 t0
+  guard_pid=''
+  read -r guard_pid <"/proc/$lever/task/$lever/children"
+  require "the $role's motor guard is lever-fw's child (pid ${guard_pid:-none})" test -n "$guard_pid"
+  poll_rt on
+  check "before its guard is killed: the $role's motor on" until_on 5 "$role"
+  clock_now
+  t0=$now
+  kill -KILL "$guard_pid"
+  time_to "the $role's motor guard killed: lever-fw stops its motor itself" 0 1 "$t0" motor_off "$role"
+  poll_rt off
+}

@@ -174,18 +174,7 @@ restart_top "after SIGKILL"
 
 # 4b. The TOP's motor guard killed: the lever hears it end (SIGCHLD), stops its motor in the handler (the enable
 # line's ioctl and the PWM's writes) and exits 1, for the service manager to start it again with a new guard.
-# Bound: the guard's exit (a small process): 0.5 ms; SIGCHLD delivered to lever-fw and its handler run: 0.2 ms; the
-# writes: 0.3 ms.
-guard_pid=''
-read -r guard_pid <"/proc/$top_pid/task/$top_pid/children"
-require "the TOP's guard is its child (pid ${guard_pid:-none})" test -n "$guard_pid"
-poll_rt on
-check "before its guard is killed: the TOP's motor on" until_on 5 top
-clock_now
-t0=$now
-kill -KILL "$guard_pid"
-time_to "TOP's guard killed: the TOP stops its motor" 0 1 "$t0" motor_off top
-poll_rt off
+kill_guard_and_time top "$top_pid"
 wait "$top_pid" 2>/dev/null
 top_code=$?
 check "and the TOP exits 1 (got $top_code)" test "$top_code" -eq 1
