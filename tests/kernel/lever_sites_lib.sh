@@ -90,6 +90,9 @@ write_config() {
 
 # key ROLE SECTION KEY: a figure of the lever's configuration ($work/ROLE.toml), which the bounds come from
 key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
+# example_key ROLE SECTION KEY: the same figure of the example configuration the lever's was made from (what ships),
+# for a bound that must not follow a lever configured otherwise
+example_key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$examples/$1.toml"; }
 
 # one_site NAME SERVE_ARGS...: both levers on one bus (the TOP's gauge on Modbus TCP), candump logging the HSI's
 # interface to $out/NAME.candump, serve started, then both lever-fw. The bus is vcan0 for both, or with

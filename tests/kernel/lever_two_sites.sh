@@ -100,7 +100,7 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 # frame, so the error is the TOP's angle less the HSI's 21 ms before. The operator must have moved: free-motion
 # reaches over 0.1-0.3 rad in 0.3-1 s (docs/hil-model.md), at rest it would prove nothing.
 # The bound, from the TOP's loop at the operator's speed (its rms v and acceleration a from the same ticks), term by
-# term. The loop: torque = kp (r - x) - kd x' + kff r' on the lever (inertia J, viscous b, Coulomb Fc: the HIL's
+# term, with the shipped example's gains (a TOP configured or running with less gain must fail it). The loop: torque = kp (r - x) - kd x' + kff r' on the lever (inertia J, viscous b, Coulomb Fc: the HIL's
 # lever, docs/hil-model.md); following a reference moving at v it lags by ((kd - kff + b) v + Fc + J a) / kp, whose
 # rms is at most ((kd - kff + b) v_rms + Fc + J a_rms) / kp. The reference itself: its frame read up to one period
 # (1 ms) after the 21 ms taken off, v_rms x 1 ms; and the motion deadband holds the velocity within p |v| + floor of
@@ -128,8 +128,8 @@ check "the operator moved the HSI while both were armed: $travel rad of travel, 
 motion_frames=$(jq '.messages.LeverMotion.frames // 0' "$work/decoded")
 session_s=$(awk 'NR == 1 { gsub(/[()]/, "", $1); t0 = $1 } { gsub(/[()]/, "", $1); t = $1 } END { print t - t0 }' \
   "$out/two-sites-hsi.candump")
-bound=$(awk -v kp="$(key top control.position kp_nm_per_rad)" -v kd="$(key top control.position kd_nms)" \
-  -v kff="$(key top control.position kff_nms)" -v p="$(key hsi codec.motion p)" -v floor="$(key hsi codec.motion floor)" \
+bound=$(awk -v kp="$(example_key top control.position kp_nm_per_rad)" -v kd="$(example_key top control.position kd_nms)" \
+  -v kff="$(example_key top control.position kff_nms)" -v p="$(example_key hsi codec.motion p)" -v floor="$(example_key hsi codec.motion floor)" \
   -v J=2e-3 -v b=0.01 -v Fc=0.01 -v v="$speed" -v a="$accel" -v frames="$motion_frames" -v s="$session_s" '
   BEGIN { lag = ((kd - kff + b) * v + Fc + J * a) / kp; read = v * 0.001; drift = (p * v + floor) * s / frames
           printf "%.5f %.5f %.5f %.5f\n", lag + read + drift, lag, read, drift }')
