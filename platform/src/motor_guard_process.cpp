@@ -114,7 +114,12 @@ int run_motor_guard(const char* spec_text) {
                std::strerror(errno) + "): a loop spinning at its priority could starve it";
     }
   }
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer's shadow is terabytes of reserved address space, which mlockall would try to fault in.
+  notes += ", memory not locked (AddressSanitizer build)";
+#else
   if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) notes += std::string(", warning: mlockall: ") + std::strerror(errno);
+#endif
   void* page = ::mmap(nullptr, sizeof(MotorGuardShared), PROT_READ | PROT_WRITE, MAP_SHARED, static_cast<int>(s.shared), 0);
   if (page == MAP_FAILED) {
     const int err = errno;
