@@ -97,7 +97,7 @@ check "before SIGKILL: the TOP's motor on" until_on 5 top
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-time_after_exit "TOP killed (SIGKILL): its motor guard, motor off" "$top_pid" 0.4 "$t0" top
+time_after_exit "TOP killed (SIGKILL): its motor guard, motor off" "$top_pid" 0.4 "$t0" top "$guard_ms"
 poll_rt off
 check "ExecStopPost's lever-fw --motor-off ran and exited 0" wait_until 10 stop_post_ok top
 check "and the TOP's PWM pin is at its inactive level (duty 0, enabled): $(pwm_hw top)" pwm_inactive top

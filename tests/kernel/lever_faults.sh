@@ -156,7 +156,8 @@ check "before SIGKILL: both motors on" until_on 5 hsi top
 clock_now
 t0=$now
 kill -KILL "$top_pid"
-time_after_exit "TOP killed: its guard stops its motor" "$top_pid" 0.4 "$t0" top
+time_after_exit "TOP killed: its guard stops its motor" "$top_pid" 0.4 "$t0" top \
+  $((guard_deadline_ms + guard_check_ms + 1))
 wait "$top_pid" 2>/dev/null  # reaped: systemd runs ExecStopPost after that
 lever-fw --config "$work/top.toml" --motor-state "$out/top.motor" --motor-off >>"$out/top.err" 2>&1
 motor_off_code=$?
