@@ -84,13 +84,12 @@ Result<MotorGuard> MotorGuard::start(const MotorGuardConfig& config, const Motor
   UniqueFd ready_read(ready[0]), ready_write(ready[1]);
   // Everything the child needs is made before fork: this process may have threads, and the child calls only
   // async-signal-safe functions until its exec.
-  const std::string spec = "lever=" + std::to_string(::getpid()) + ",shared=" + std::to_string(memory.get()) +
-                           ",duty=" + std::to_string(handles.duty_fd) + ",enable=" +
-                           std::to_string(handles.enable_fd) + ",line=" + std::to_string(handles.enable_line_fd) +
-                           ",deadline_ms=" + std::to_string(config.deadline.count()) +
-                           ",check_ms=" + std::to_string(config.check.count()) +
-                           ",priority=" + std::to_string(config.fifo_priority) + ",ready=" +
-                           std::to_string(ready_write.get());
+  const std::string spec =
+      "lever=" + std::to_string(::getpid()) + ",shared=" + std::to_string(memory.get()) +
+      ",duty=" + std::to_string(handles.duty_fd) + ",enable=" + std::to_string(handles.enable_fd) +
+      ",line=" + std::to_string(handles.enable_line_fd) + ",deadline_ms=" + std::to_string(config.deadline.count()) +
+      ",check_ms=" + std::to_string(config.check.count()) + ",priority=" + std::to_string(config.fifo_priority) +
+      ",ready=" + std::to_string(ready_write.get());
   const char* argv[] = {config.program.c_str(), "--motor-guard", spec.c_str(), nullptr};
   const int passed[] = {memory.get(), handles.duty_fd, handles.enable_fd, handles.enable_line_fd, ready_write.get()};
 

@@ -36,9 +36,15 @@ bool parse(std::string_view text, Spec& spec) {
     std::string_view key;
     long* value;
   };
-  const Field fields[] = {{"lever", &spec.lever},       {"shared", &spec.shared},           {"duty", &spec.duty},
-                          {"enable", &spec.enable},     {"line", &spec.line},               {"ready", &spec.ready},
-                          {"deadline_ms", &spec.deadline_ms}, {"check_ms", &spec.check_ms}, {"priority", &spec.priority}};
+  const Field fields[] = {{"lever", &spec.lever},
+                          {"shared", &spec.shared},
+                          {"duty", &spec.duty},
+                          {"enable", &spec.enable},
+                          {"line", &spec.line},
+                          {"ready", &spec.ready},
+                          {"deadline_ms", &spec.deadline_ms},
+                          {"check_ms", &spec.check_ms},
+                          {"priority", &spec.priority}};
   while (!text.empty()) {
     const std::string_view item = text.substr(0, text.find(','));
     text.remove_prefix(std::min(text.size(), item.size() + 1));
@@ -120,7 +126,8 @@ int run_motor_guard(const char* spec_text) {
 #else
   if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) notes += std::string(", warning: mlockall: ") + std::strerror(errno);
 #endif
-  void* page = ::mmap(nullptr, sizeof(MotorGuardShared), PROT_READ | PROT_WRITE, MAP_SHARED, static_cast<int>(s.shared), 0);
+  void* page =
+      ::mmap(nullptr, sizeof(MotorGuardShared), PROT_READ | PROT_WRITE, MAP_SHARED, static_cast<int>(s.shared), 0);
   if (page == MAP_FAILED) {
     const int err = errno;
     drive_off(s);
@@ -147,7 +154,8 @@ int run_motor_guard(const char* spec_text) {
     return 1;
   }
   answer(ready, "ok deadline " + std::to_string(s.deadline_ms) + " ms, checked every " + std::to_string(s.check_ms) +
-                    " ms, " + (s.priority > 0 ? "SCHED_FIFO " + std::to_string(s.priority) : std::string("no priority")) +
+                    " ms, " +
+                    (s.priority > 0 ? "SCHED_FIFO " + std::to_string(s.priority) : std::string("no priority")) +
                     (s.line >= 0 ? "" : ", no enable line") + notes);
 
   const std::int64_t deadline_ns = s.deadline_ms * 1'000'000;

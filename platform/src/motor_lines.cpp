@@ -29,8 +29,8 @@ Result<Found> find(const char* field, const MotorLineConfig& config) {
     return os_error(err, std::string("motor ") + field + ": cannot open chip \"" + config.chip +
                              "\" (no such path, name or label?)");
   }
-  std::string where = std::string("motor ") + field + " (" + config.line.describe() + " on " +
-                      describe_chip(chip.get()) + ")";
+  std::string where =
+      std::string("motor ") + field + " (" + config.line.describe() + " on " + describe_chip(chip.get()) + ")";
   gpiod_line* line = find_gpio_line(chip.get(), config.line);
   if (line == nullptr) {
     const int err = errno;

@@ -127,7 +127,7 @@ TEST_CASE("TorqueToDuty: magnitude over the torque at full duty, clamped, with a
 
 TEST_CASE("PwmMotor: open zeroes the duty, writes the period and polarity, and leaves the channel enabled at duty 0",
           "[motor]") {
-  PwmSysfsTree tree(kChip, kChannel);  // as a crashed run left it: enabled, duty 123456, inversed
+  PwmSysfsTree tree(kChip, kChannel);       // as a crashed run left it: enabled, duty 123456, inversed
   tree.overwrite("enable", "untouched\n");  // so that the 1 read below is one open wrote
   PwmMotorConfig c = config_for(tree);
   SECTION("normal polarity") {
@@ -231,9 +231,10 @@ TEST_CASE("PwmMotor: an unchanged duty is written again every kConfirmEvery comm
 // Another process writing the enable (another instance's --motor-off naming this lever's channel) changes
 // nothing this lever writes, so only a read-back sees it. What the lever writes at rest is not assumed here: the
 // foreign write is the other value than the one it last wrote.
-TEST_CASE("PwmMotor: a foreign write of the enable is seen within kConfirmEvery commands and reported as a driver "
-          "fault",
-          "[motor]") {
+TEST_CASE(
+    "PwmMotor: a foreign write of the enable is seen within kConfirmEvery commands and reported as a driver "
+    "fault",
+    "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   PwmMotor motor = open_or_fail(config_for(tree));
   const auto seen_within = [&](const MotorCommand& command) {

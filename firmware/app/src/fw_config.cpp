@@ -385,8 +385,8 @@ MotorKeys motor_keys_from(const toml::table& table, const std::string& source, M
     named = schema.keys(kMotor);
   } else {
     const auto& b = config.board;
-    named = {"board.motor.pwm_chip", "board.motor.pwm_channel", "board.motor.enable_line",
-             "board.motor.direction_line", "board.motor.fault_line"};
+    named = {"board.motor.pwm_chip", "board.motor.pwm_channel", "board.motor.enable_line", "board.motor.direction_line",
+             "board.motor.fault_line"};
     if (!b.motor_enable_line.empty() || !b.motor_direction_line.empty() || !b.motor_fault_line.empty())
       named.push_back("board.motor.line_chip");
   }
@@ -394,9 +394,9 @@ MotorKeys motor_keys_from(const toml::table& table, const std::string& source, M
   for (const auto& key : named)
     if (!table.at_path(key)) missing += (missing.empty() ? "" : ", ") + key;
   if (!missing.empty() && motor_readable) {
-    out.problems.insert(out.problems.begin(),
-                        fmt::format("{}: {}: missing; the motor is named by its keys, never by their defaults", source,
-                                    missing));
+    out.problems.insert(
+        out.problems.begin(),
+        fmt::format("{}: {}: missing; the motor is named by its keys, never by their defaults", source, missing));
     motor_readable = false;
   }
   if (motor_readable) {

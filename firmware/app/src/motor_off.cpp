@@ -29,7 +29,8 @@ int stop(const platform::PwmMotorConfig& config, const std::string& named_by) {
     fmt::print(stderr, "lever-fw: --motor-off: cannot stop the motor {} names: {}\n", named_by, motor.error().message);
     return kNotStopped;
   }
-  fmt::print(stderr, "lever-fw: --motor-off: {} (named by {}): PWM at duty 0 (enabled: the inactive level), enable line off\n",
+  fmt::print(stderr,
+             "lever-fw: --motor-off: {} (named by {}): PWM at duty 0 (enabled: the inactive level), enable line off\n",
              motor.value().description(), named_by);
   return kStopped;
 }
@@ -85,9 +86,10 @@ int motor_off(const std::string& config_path, const std::string& state_path) {
                        "is not stopped in its place");
   }
   if (!state.writer.boot_id.empty() && !self.boot_id.empty() && state.writer.boot_id != self.boot_id) {
-    return not_stopped(fmt::format("the motor state {} is STALE: written by {} in another boot ({}, this one {}); "
-                                   "its motor was reset with the board since",
-                                   state_path, described(state.writer), state.writer.boot_id, self.boot_id));
+    return not_stopped(
+        fmt::format("the motor state {} is STALE: written by {} in another boot ({}, this one {}); "
+                    "its motor was reset with the board since",
+                    state_path, described(state.writer), state.writer.boot_id, self.boot_id));
   }
   if (under_unit && state.writer.invocation_id != self.invocation_id) {
     return not_stopped(fmt::format(

@@ -97,8 +97,8 @@ std::vector<PwmApplied> PwmControllerState::apply_log() const {
     const auto duty = next_number(line, at);
     const auto pin = next_number(line, at);
     if (!number || !time || !enabled || !period || !duty || !pin || *pin > kPinFullPpm) return {};
-    log.push_back({*number, static_cast<std::int64_t>(*time), *enabled == 1, *period, *duty,
-                   static_cast<std::uint32_t>(*pin)});
+    log.push_back(
+        {*number, static_cast<std::int64_t>(*time), *enabled == 1, *period, *duty, static_cast<std::uint32_t>(*pin)});
   }
   return log;
 }

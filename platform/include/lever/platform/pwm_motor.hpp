@@ -4,10 +4,10 @@
 //
 // The motor stops (enable line deasserted, then duty 0 with the PWM kept enabled: the kernel's PWM documentation
 // leaves a disabled PWM's output undefined, and duty 0 enabled is the defined inactive level, whatever the
-// polarity) on every way out that runs code in this process: the destructor; exit() with the motor still open (an atexit hook); and, through
-// emergency_stop_all(), a signal handler (install_motor_stop_signal_handlers() in motor_stop_signals.hpp).
-// What stops it when the process cannot run code (kill -9, a kernel panic, power) is the board's:
-// docs/board-motor.md.
+// polarity) on every way out that runs code in this process: the destructor; exit() with the motor still open (an
+// atexit hook); and, through emergency_stop_all(), a signal handler (install_motor_stop_signal_handlers() in
+// motor_stop_signals.hpp). What stops it when the process cannot run code (kill -9, a kernel panic, power) is the
+// board's: docs/board-motor.md.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -35,8 +35,9 @@ class PwmMotor {
   static constexpr unsigned kConfirmEvery = 10;
 
   // Validates the config, sets up the PWM channel (SysfsPwm: exported if needed, duty 0, disabled while period
-  // and polarity are set, then enabled at duty 0), requests the lines (enable and direction deasserted), and registers for the emergency stop.
-  // Fails naming the file or line and the reason; at most kMaxStoppableMotors (8) are open at a time.
+  // and polarity are set, then enabled at duty 0), requests the lines (enable and direction deasserted), and registers
+  // for the emergency stop. Fails naming the file or line and the reason; at most kMaxStoppableMotors (8) are open at a
+  // time.
   static Result<PwmMotor> open(const PwmMotorConfig& config);
 
   // Move-only. A moved-from motor owns nothing: it may only be destroyed or assigned to. Assigning to a motor
