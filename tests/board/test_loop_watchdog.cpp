@@ -288,8 +288,7 @@ KillTimes run_and_hang(Hang hang) {
       if (hang == Hang::stopped_process) ::kill(child, SIGSTOP);
     }
     const std::int64_t now = lever::platform::monotonic_ns();
-    // Judged from the hang on: a child starved of the CPU before its 300th tick (this machine shared by a -j2 run,
-    // two QEMU guests and a build: once, the kill came first and the hang was never seen) is not the case measured.
+    // Judged from the hang on: a child starved of the CPU before its 300th tick is not the case measured.
     if (stuck_ns != 0 && ready && last_feed_ns &&
         now - *last_feed_ns > std::chrono::nanoseconds(kWatchdogSec).count()) {
       ::kill(child, SIGABRT);  // WatchdogSignal=SIGABRT

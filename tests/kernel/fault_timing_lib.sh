@@ -142,8 +142,7 @@ until_on() {
 # this one CPU, while this shell, at SCHED_FIFO 99 above everything, polls both levers' motors every 0.2 ms (a few
 # tens of microseconds each, so the guards at 81 lose no more than that). Each lever's time to motor_off counts from
 # just before the spinner is forked: the loops lose the CPU from there, to its start (forked at 99, then chrt and
-# bash at 80) before its spin (a first run timed from the spin's own first stamp saw both guards act 6-12 ms before
-# it). Its controller's stamp where the stop changed the PWM's state, else the poll that saw it; each against MAX_MS.
+# bash at 80) before its spin. Its controller's stamp where the stop changed the PWM's state, else the poll that saw it; each against MAX_MS.
 # The shell goes back to FIFO 50 after.
 spin_and_time() {
   local name=$1 max=$2 seen_hsi='' seen_top='' deadline spin_t0 role
@@ -180,9 +179,8 @@ spin_and_time() {
 # kill_guard_and_time ROLE LEVER_PID: kills the lever's motor guard (lever-fw's only child; sets $guard_pid) with
 # the lever driving torque, and times lever-fw's own stop of its motor (its SIGCHLD handler). Bound, term by term:
 # the guard's exit, as this shell sees it (time_after_exit); then SIGCHLD delivered to lever-fw and its handler
-# run, 0.2 ms; the enable line's ioctl and the PWM's two writes, the last stamped by the controller, 0.3 ms. A first
-# run's fixed 1 ms (0.5 ms for the exit) failed at 1.50 and 1.65 ms: the kernel tears the guard's locked memory
-# down before its parent hears of it, which that figure did not measure.
+# run, 0.2 ms; the enable line's ioctl and the PWM's two writes, the last stamped by the controller, 0.3 ms. The
+# exit is measured, not assumed: the kernel tears the guard's locked memory down before its parent hears of it.
 kill_guard_and_time() {
   local role=$1 lever=$2 t0
   guard_pid=''
@@ -197,9 +195,8 @@ kill_guard_and_time() {
   poll_rt off
 }
 
-# exited PID: the process has ended: reaped already, or a zombie with no thread left but its first (whose own end
-# comes first, while the others still tear down: a first try on the leader's Z alone read 0.23 ms for an end whose
-# pidfd the guard heard 10 ms later)
+# exited PID: the process has ended: reaped already, or a zombie with no thread left but its first (the first
+# thread's own end comes first, while the others still tear down; its pidfd is readable only after them)
 exited() {
   local key value rest state='' threads=''
   [[ -r /proc/$1/status ]] || return 0

@@ -143,8 +143,8 @@ rearm "gauge server back"
 # PWM's files, sees its pidfd and stops the motor. Bound, term by term: the kernel ends the process (its threads,
 # its memory, locked, and its files) before the pidfd is readable: measured here (time_after_exit); the guard, at
 # SCHED_FIFO above the loops, wakes at once on this one CPU: 0.1 ms; the line's ioctl and the two PWM writes, the
-# last one stamped by the controller: 0.3 ms. A first run's fixed 2 ms for the end of the process failed (10.89 ms
-# in all): lever-fw's memory, every thread's stack included, is locked (mlockall) and torn down first. Then, as the service manager's ExecStopPost does, lever-fw --motor-off stops
+# last one stamped by the controller: 0.3 ms. The end is measured, not assumed: lever-fw's memory, every thread's
+# stack included, is locked (mlockall) and torn down first. Then, as the service manager's ExecStopPost does, lever-fw --motor-off stops
 # it again: its configuration was cut in half while it ran (an edit, a full disk; here the cut falls in a comment,
 # so the rest is valid TOML whose motor keys are the defaults: the HSI's PWM chip): --motor-off stops the motor the
 # lever's motor state names (--motor-state, written at its start), not the configuration's. The HSI hears the TOP

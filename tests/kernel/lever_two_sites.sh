@@ -103,15 +103,13 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 # term, with the shipped example's gains. The loop: torque = kp (r - x) + kd (r' - x') + kff r' on the lever
 # (inertia J, viscous b, Coulomb Fc: the HIL's lever, docs/hil-model.md; controllers.hpp); following a reference
 # moving at v it lags by ((b - kff) v + Fc + J a) / kp (kd acts on the velocity's error, which is 0 in the steady
-# ramp), whose rms is at most (|b - kff| v_rms + Fc + J a_rms) / kp. A first derivation counted kd as a lag,
-# (kd - kff + b) v / kp, and gave 4.68 mrad. Each position is an encoder's count, uniform within one (2 pi / 16384):
+# ramp), whose rms is at most (|b - kff| v_rms + Fc + J a_rms) / kp. Each position is an encoder's count, uniform within one (2 pi / 16384):
 # the HSI's on the wire and the TOP's own, 1/sqrt(12) of a count rms each. The reference itself: its frame read up to one period
 # (1 ms) after the 21 ms taken off, v_rms x 1 ms; and the motion deadband holds the velocity within p |v| + floor of
 # the HSI's between frames, each frame carrying the position, so the reference drifts by at most (p v_rms + floor)
 # times the mean interval between the HSI's motion frames (over the whole run, rest included: longer than while
-# moving). Before, the bound was the loop's saturation, 25 mrad, about 20 times the 1.2-1.3 mrad measured. Not caught
-# by it: a TOP with a tenth of the gain tracked within 1.45 mrad here (the reference's own error dominates at this
-# operator's motion), so this bound says the pair tracks as derived, not that the TOP has its gain.
+# moving). It says the pair tracks as derived, not that the TOP has its gain: at this operator's motion the
+# reference's own error dominates (docs/deploy.md and the commit that wrote it say what a tenth of the gain gave).
 read -r ticks rms travel speed accel < <(awk -F, -v delay=21 -v settle=500 '
   BEGIN { since = -1 }
   NR == 1 { next }

@@ -5,9 +5,8 @@
 # confirming write (an unchanged duty written again every PwmMotor::kConfirmEvery commands) meets the gone channel,
 # and its release takes the driver's enable line low. Code that writes only a changed duty notices at the next
 # change, or never. The operator keeps hands off (serve --hands-off): the HSI rests, armed, its driver enabled. Its
-# display gain is 0 (control.display.gain), so it commands exactly zero torque, duty 0, for as long as it rests:
-# shown the TOP's gauge at rest instead, its duty moved by one step now and then, and in 2-11 % of runs inside the
-# window below, where a lever without the confirming write passed too. The TOP hunts between two encoder counts,
+# display gain is 0 (control.display.gain), so it commands exactly zero torque, duty 0, for as long as it rests: a
+# duty that moved inside the window below would let a lever without the confirming write pass. The TOP hunts between two encoder counts,
 # its duty changing every few periods, so it is the HSI's channel that goes.
 # usage: lever_unexport_at_rest.sh BIN_DIR
 set -uo pipefail
