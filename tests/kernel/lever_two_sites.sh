@@ -109,7 +109,7 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 # the HSI's between frames, each frame carrying the position, so the reference drifts by at most (p v_rms + floor)
 # times the mean interval between the HSI's motion frames (over the whole run, rest included: longer than while
 # moving). It says the pair tracks as derived, not that the TOP has its gain: at this operator's motion the
-# reference's own error dominates (docs/deploy.md and the commit that wrote it say what a tenth of the gain gave).
+# reference's own error dominates (the commit that wrote this bound says what a tenth of the gain gave).
 read -r ticks rms travel speed accel < <(awk -F, -v delay=21 -v settle=500 '
   BEGIN { since = -1 }
   NR == 1 { next }
