@@ -5,20 +5,93 @@
 # file (a fork costs milliseconds of guest time and a read of /proc/timer_list near one, all of it counted). In
 # virtual time (-rtc clock=vm) the guest's realtime clock runs with its monotonic one.
 clock_now() { now=${EPOCHREALTIME/./}; }
-# mono_offset: CLOCK_MONOTONIC less $EPOCHREALTIME, in microseconds (to put the controllers' stamps on the test's
-# clock), read once: /proc/timer_list's "now at" between two clock_now. Also has pin_inactive read, now rather than
-# in a timed poll, which levers' boards invert their PWM.
+# The kernel's own stamps, all on CLOCK_MONOTONIC (the PWM controllers' clock): tracefs with trace_clock mono,
+# the gpio_value events of the levers' enable lines (the kernel stamps the line's change, so no poll's lateness
+# counts), and this shell's marks (trace_marker). Only the enable lines' sets are traced: the encoders' reads are
+# thousands a second, more than a poll could read. Reading the trace must not pause it (pause-on-trace), or a stop
+# that comes while a poll reads it would go unstamped. trace_setup GPIO...: the enable lines' numbers.
+tracing=/sys/kernel/tracing
+trace_setup() {
+  local filter='' gpio
+  for gpio in "$@"; do filter+="${filter:+ || }gpio == $gpio"; done
+  [[ -n $filter ]] || return 1
+  [[ -w $tracing/trace_marker ]] || mount -t tracefs nodev "$tracing" || return 1
+  echo 0 >"$tracing/events/gpio/gpio_value/enable" &&
+    echo "get == 0 && ($filter)" >"$tracing/events/gpio/gpio_value/filter" &&
+    echo mono >"$tracing/trace_clock" &&  # which also empties the buffer
+    echo 0 >"$tracing/options/pause-on-trace" &&
+    echo 1 >"$tracing/events/gpio/gpio_value/enable" &&
+    echo 1 >"$tracing/tracing_on"
+}
+# trace_us LINE: $tus, the trace line's stamp in microseconds of CLOCK_MONOTONIC ("...  11.188203: event: ...")
+trace_us() {
+  local s=${1%%: *}
+  s=${s##* }
+  tus=$((${s%.*} * 1000000 + 10#${s#*.}))
+}
+# mark_stamp TEXT: $stamp, the newest trace mark TEXT (written to trace_marker) on clock_now's clock; empty if none
+mark_stamp() {
+  local line
+  stamp=''
+  while IFS= read -r line; do
+    [[ $line == *": tracing_mark_write: $1" ]] || continue
+    trace_us "$line"
+    stamp=$((tus - offset_us))
+  done <"$tracing/trace"
+}
+# mono_offset: CLOCK_MONOTONIC less $EPOCHREALTIME, in microseconds (to put the kernel's stamps on the test's
+# clock): a trace mark's stamp between two clock_now, so within the cost of one small write. Sets up the tracing.
+# Also has pin_inactive read, now rather than in a timed poll, which levers' boards invert their PWM, and each
+# lever's enable line's number in the gpio_value events.
 mono_offset() {
-  local line a b role
-  for role in hsi top; do [[ -r $work/$role.toml ]] && { pin_inactive "$role" 0 || :; }; done
-  clock_now
-  a=$now
-  while read -r line; do [[ $line == "now at "* ]] && break; done </proc/timer_list
-  clock_now
-  b=$now
-  line=${line#now at }
-  offset_us=$((${line%% *} / 1000 - (a + b) / 2))
-  echo "CLOCK_MONOTONIC - realtime: $offset_us us (+-$(((b - a) / 2)) us)"
+  local a b role base lines=() mono
+  for role in hsi top; do
+    [[ -r $work/$role.toml ]] && { pin_inactive "$role" 0 || :; }
+    local gpio=${role}_gpio
+    if [[ -n ${!gpio:-} ]]; then
+      read -r base <"$(echo "${!gpio%/*}"/gpio/gpiochip*/base)" && printf -v "enable_gpio_$role" '%s' $((base + 2))
+      lines+=($((base + 2)))
+    fi
+  done
+  trace_setup "${lines[@]}" || { check "tracefs: the kernel's stamps of the enable lines" false; return 1; }
+  # Ten marks, then the trace read; the narrowest counts (one the loops preempted is only wider). Not at a
+  # real-time priority: the chrt that would bring this shell back would start at it, and its start alone (a fork and
+  # an exec, milliseconds here) would hold the loops off long enough to latch TIMING.
+  local try best='' error before=() after=()
+  for try in 0 1 2 3 4 5 6 7 8 9; do
+    clock_now
+    before[try]=$now
+    echo "lever-test: clock $try" >"$tracing/trace_marker"
+    clock_now
+    after[try]=$now
+  done
+  offset_us=0
+  for try in 0 1 2 3 4 5 6 7 8 9; do
+    a=${before[try]} b=${after[try]}
+    mark_stamp "lever-test: clock $try"
+    if [[ -z $best ]] || ((b - a < best)); then best=$((b - a)) error=$(((b - a + 1) / 2)) mono=$((stamp - (a + b) / 2)); fi
+  done
+  offset_us=$mono
+  echo "CLOCK_MONOTONIC - realtime: $offset_us us (+-$error us)"
+}
+# line_stamp ROLE T0: $stamp, the time (clock_now's clock) from which the lever's enable line has been low, as the
+# kernel stamped its gpio_value events since T0 (the first of the last run of lows); empty when it was set high
+# after its last low, or never set since T0
+line_stamp() {
+  local line number=enable_gpio_$1 value
+  stamp=''
+  [[ -n ${!number:-} ]] || return 0
+  while IFS= read -r line; do
+    [[ $line == *": gpio_value: ${!number} set "[01] ]] || continue
+    trace_us "$line"
+    ((tus - offset_us >= $2)) || continue
+    value=${line##* }
+    if ((value == 0)); then
+      [[ -n $stamp ]] || stamp=$((tus - offset_us))
+    else
+      stamp=''
+    fi
+  done <"$tracing/trace"
 }
 # applied_since ROLE T0: the states the lever's controller was programmed with since T0 (clock_now), as
 # "+ms enabled period duty pin"
@@ -62,26 +135,43 @@ enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/va
 # poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
 # serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }
+# off_time CONDITION ROLE T0: when CONDITION (motor_off, pwm_inactive or enable_low), which holds now, began, from
+# the kernel's stamps into $now, and $how says which: for pwm_inactive the controller's stamp; for enable_low the
+# line's; for motor_off the earlier of the two (the motor has been off since then, as each has stayed off since its
+# own). $now and $how are left as they are (the poll that saw it) when there is no stamp.
+off_time() {
+  local line_at='' pin_at=''
+  case $1 in motor_off | pwm_inactive | enable_low) ;; *) return 0 ;; esac
+  if [[ $1 != pwm_inactive ]]; then
+    line_stamp "$2" "$3"
+    line_at=$stamp
+  fi
+  if [[ $1 != enable_low ]]; then
+    off_stamp "$2" "$3"
+    pin_at=$stamp
+  fi
+  if [[ -n $line_at && (-z $pin_at || $line_at -le $pin_at) ]]; then
+    now=$line_at how="the enable line's stamp"
+  elif [[ -n $pin_at ]]; then
+    now=$pin_at how="the controller's stamp"
+  fi
+}
 # time_to NAME MIN_MS MAX_MS T0 CONDITION...: waits (polling each 0.2 ms of guest time, up to 5 s) until the
-# condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`
-# and `pwm_inactive ROLE` the time is the controller's own stamp of the state that stopped the motor (apply_log);
-# when the motor stopped by its driver's enable line instead (no stamp), or for any other condition, it is the
-# first poll that saw it.
+# condition holds, and checks the time from T0 (clock_now) to it is within [MIN_MS, MAX_MS]. For `motor_off ROLE`,
+# `pwm_inactive ROLE` and `enable_low ROLE` the time is the kernel's own stamp of the change that stopped the motor
+# (off_time); for any other condition, or with no stamp, the first poll that saw it.
 time_to() {
   local name=$1 min=$2 max=$3 t0=$4
   shift 4
   local deadline=$((t0 + 5000000)) how=polled every=0.0002
-  [[ $1 == motor_off || $1 == pwm_inactive ]] && every=0.002  # stamped: the polls only wait
+  [[ $1 == motor_off || $1 == pwm_inactive || $1 == enable_low ]] && every=0.002  # stamped: the polls only wait
   while ! "$@"; do
     clock_now
     ((now < deadline)) || { check "$name: not reached within 5 s (bound $max ms)" false; return; }
     read -rt "$every" -u "$never_ready" || :
   done
   clock_now
-  if [[ $1 == motor_off || $1 == pwm_inactive ]]; then
-    off_stamp "$2" "$t0"
-    [[ -n $stamp ]] && now=$stamp how="the controller's stamp"
-  fi
+  off_time "$1" "$2" "$t0"
   local ms bound="<= $max"
   ((min > 0)) && bound="$min..$max"
   ms=$(ms_since "$t0" "$now")
@@ -139,41 +229,21 @@ until_on() {
 }
 
 # spin_and_time NAME MAX_MS: a process at SCHED_FIFO 80, the loops' own priority, spins 100 ms by its own clock on
-# this one CPU, while this shell, at SCHED_FIFO 99 above everything, polls both levers' motors every 0.2 ms (a few
-# tens of microseconds each, so the guards at 81 lose no more than that). Each lever's time to motor_off counts from
-# just before the spinner is forked: the loops lose the CPU from there, to its start (forked at 99, then chrt and
-# bash at 80) before its spin. Its controller's stamp where the stop changed the PWM's state, else the poll that saw it; each against MAX_MS.
-# The shell goes back to FIFO 50 after.
+# this one CPU; each lever's time to motor_off counts from the spinner's first act, a trace mark: from there no loop
+# steps (a FIFO process that lowers itself to 80 runs at the head of that priority, and it never blocks), so each
+# loop's last step came before it. This shell forks it from SCHED_FIFO 99 and waits for it without polling: a poller
+# above the guards (81) would delay them by its own polls. The times come from the kernel's stamps (off_time).
 spin_and_time() {
-  local name=$1 max=$2 seen_hsi='' seen_top='' deadline spin_t0 role
+  local name=$1 max=$2 role spin_t0
   chrt -f -p 99 $$ >/dev/null
-  clock_now
-  spin_t0=$now
-  chrt -f 80 bash -c 'end=$((${EPOCHREALTIME/./} + 100000)); while ((${EPOCHREALTIME/./} < end)); do :; done' &
-  local spinner=$!
-  deadline=$((now + 5000000))
-  while [[ -z $seen_hsi || -z $seen_top ]] && ((now < deadline)); do
-    read -rt 0.0002 -u "$never_ready" || :
-    clock_now
-    [[ -z $seen_hsi ]] && motor_off hsi && seen_hsi=$now
-    [[ -z $seen_top ]] && motor_off top && seen_top=$now
-  done
-  wait "$spinner"
+  chrt -f 80 bash -c 'echo "lever-test: spin" >'"$tracing"'/trace_marker
+    end=$((${EPOCHREALTIME/./} + 100000)); while ((${EPOCHREALTIME/./} < end)); do :; done' &
+  wait "$!"
   chrt -f -p 50 $$ >/dev/null
-  for role in hsi top; do
-    local seen=seen_$role how=polled ms
-    if [[ -z ${!seen} ]]; then
-      check "$name: the $role's motor off: not reached within 5 s (bound $max ms)" false
-      continue
-    fi
-    now=${!seen}
-    off_stamp "$role" "$spin_t0"
-    [[ -n $stamp ]] && ((stamp <= now)) && now=$stamp how="the controller's stamp"
-    ms=$(ms_since "$spin_t0" "$now")
-    check "$name: the $role's motor off: $ms ms, $how (bound <= $max ms)" \
-      awk -v m="$ms" -v hi="$max" 'BEGIN { exit !(m >= 0 && m <= hi) }'
-    fault_rows+=("| $name: the $role's motor | <= $max | $ms | $how |")
-  done
+  mark_stamp "lever-test: spin"
+  spin_t0=$stamp
+  require "the spinner marked its start" test -n "$spin_t0"
+  for role in hsi top; do time_to "$name: the $role's motor off" 0 "$max" "$spin_t0" motor_off "$role"; done
 }
 
 # kill_guard_and_time ROLE LEVER_PID: kills the lever's motor guard (lever-fw's only child; sets $guard_pid) with
