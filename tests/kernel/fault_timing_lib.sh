@@ -184,11 +184,20 @@ fault_rows=()
 # refuses to arm; a re-arm while the HSI is inside the wall has the TOP push the wall at its torque limit until
 # that latches. So, as an operator would, the re-arm is pressed again until the pair stays armed: both armed in
 # status lines written 1.5 s after a press, and still 1.5 s later (at most 20 presses; a re-arm of an armed lever
-# does nothing).
+# does nothing). The swing can also outrun a lever's edge queue (an encoder fault: its count lost, which only
+# homing restores), so a lever that shows one is homed first, once.
 both_armed() { [[ $(last_stat hsi '.state == "armed"') == true && $(last_stat top '.state == "armed"') == true ]]; }
+count_lost() {
+  [[ $(last_stat top '.faults | index("encoder") != null') == true ||
+    $(last_stat hsi '.faults | index("encoder") != null') == true ]]
+}
 rearm() {
   local presses=0
   while ((presses < 20)); do
+    if [[ $1 != *", homed" ]] && count_lost; then
+      rehome "$1, a count lost"
+      return
+    fi
     command vcan0 3
     presses=$((presses + 1))
     sleep 1.5
@@ -199,12 +208,30 @@ rearm() {
   require "re-armed after: $1 ($presses presses)" both_armed
 }
 
+# stat_lines ROLE: how many status lines the lever has printed; status_mark: each lever's count now, just after a
+# fault, for recover
+stat_lines() { local n=0 line; while IFS= read -r line; do n=$((n + 1)); done <"$out/$1.stats"; echo "$n"; }
+status_mark() { mark_hsi=$(stat_lines hsi) mark_top=$(stat_lines top); }
+# recover WHY: after a fault that may have cost a lever its count, once each lever has printed two status lines past
+# status_mark (the second is wholly from after the fault: the loop publishes a snapshot every 100 ms, the printer the
+# newest once a second; an encoder fault found when the loop runs again shows there), the pair re-armed (rearm
+# homes a lever that lost its count)
+recover() {
+  local role mark deadline=$((SECONDS + 10))
+  for role in hsi top; do
+    mark=mark_$role
+    while (($(stat_lines "$role") < ${!mark} + 2 && SECONDS < deadline)); do sleep 0.2; done
+  done
+  rearm "$1"
+}
+
 # rehome WHY: both levers disarmed (the HSI leaves its safe state, faults kept), homed and re-armed: what a lever
 # whose count can no longer be trusted needs
 rehome() {
   command vcan0 2
   command vcan0 6
-  require "the TOP homes again ($1)" wait_for 120 top '.position_valid'
+  require "the pair homes again ($1)" wait_for 120 top '.position_valid'
+  require "(the HSI too)" wait_for 120 hsi '.position_valid'
   rearm "$1, homed"
 }
 
@@ -229,21 +256,50 @@ until_on() {
 }
 
 # spin_and_time NAME MAX_MS: a process at SCHED_FIFO 80, the loops' own priority, spins 100 ms by its own clock on
-# this one CPU; each lever's time to motor_off counts from the spinner's first act, a trace mark: from there no loop
-# steps (a FIFO process that lowers itself to 80 runs at the head of that priority, and it never blocks), so each
-# loop's last step came before it. This shell forks it from SCHED_FIFO 99 and waits for it without polling: a poller
-# above the guards (81) would delay them by its own polls. The times come from the kernel's stamps (off_time).
+# this one CPU. From the spinner's first act, a trace mark, no loop steps (a FIFO process that lowers itself to 80
+# runs at the head of that priority, and it never blocks); before it, while the spinner starts, a loop may still
+# step. Each lever's guard counts its deadline from the loop's last step, so each time counts from there: the last
+# time the loop's thread (lever-fw's main thread, $ROLE_pid) went to sleep before the mark, from the kernel's
+# sched_switch events, traced for the two loops during the spin only. This shell forks the spinner from SCHED_FIFO
+# 99 and waits for it without polling: a poller above the guards (81) would delay them by its own polls. The motors'
+# times come from the kernel's stamps (off_time).
 spin_and_time() {
-  local name=$1 max=$2 role spin_t0
+  local name=$1 max=$2 role spin_t0 line pid
+  require "the levers' pids are known (hsi ${hsi_pid:-none}, top ${top_pid:-none})" test -n "${hsi_pid:-}" -a -n "${top_pid:-}"
+  echo "prev_pid == $hsi_pid || prev_pid == $top_pid" >"$tracing/events/sched/sched_switch/filter"
+  echo 1 >"$tracing/events/sched/sched_switch/enable"
   chrt -f -p 99 $$ >/dev/null
   chrt -f 80 bash -c 'echo "lever-test: spin" >'"$tracing"'/trace_marker
-    end=$((${EPOCHREALTIME/./} + 100000)); while ((${EPOCHREALTIME/./} < end)); do :; done' &
+    end=$((${EPOCHREALTIME/./} + 100000)); while ((${EPOCHREALTIME/./} < end)); do :; done' 2>"$out/spinner.err" &
   wait "$!"
+  local spun=$?
   chrt -f -p 50 $$ >/dev/null
+  status_mark
+  echo 0 >"$tracing/events/sched/sched_switch/enable"
   mark_stamp "lever-test: spin"
   spin_t0=$stamp
+  if [[ -z $spin_t0 ]]; then
+    echo "the spinner exited $spun: $(<"$out/spinner.err"); tracing_on $(<"$tracing/tracing_on")" >&2
+    grep -v '^#' "$tracing/per_cpu/cpu0/stats" >&2
+    grep -c . "$tracing/trace" >&2
+    grep -v '^#' "$tracing/trace" | tail -n 5 >&2
+  fi
   require "the spinner marked its start" test -n "$spin_t0"
-  for role in hsi top; do time_to "$name: the $role's motor off" 0 "$max" "$spin_t0" motor_off "$role"; done
+  for role in hsi top; do
+    pid=${role}_pid
+    local slept=''
+    while IFS= read -r line; do
+      [[ $line == *": sched_switch: "*" prev_pid=${!pid} "*" prev_state=S "* ]] || continue
+      trace_us "$line"
+      ((tus - offset_us <= spin_t0)) && slept=$((tus - offset_us))
+    done <"$tracing/trace"
+    if [[ -z $slept ]]; then
+      check "$name: the $role's loop: its last step before the spin is in the trace" false
+      continue
+    fi
+    echo "$name: the $role's loop last stepped $(ms_since "$slept" "$spin_t0") ms before the spinner's start"
+    time_to "$name: the $role's motor off, from its loop's last step" 0 "$max" "$slept" motor_off "$role"
+  done
 }
 
 # kill_guard_and_time ROLE LEVER_PID: kills the lever's motor guard (lever-fw's only child; sets $guard_pid) with

@@ -50,7 +50,6 @@ stop_top() {  # stop_top SECONDS: SIGSTOP, a builtin sleep, SIGCONT; sets t0 and
 # Below the bound: stopped for less than a period, the TOP loses at most one period, which its budget spends.
 # Judged on status lines taken after the stop only: the first line printed after SIGCONT may carry a snapshot from
 # before it (the loop publishes one every 100 ms, the printer prints the newest once a second), the second cannot.
-stat_lines() { local n=0 line; while IFS= read -r line; do n=$((n + 1)); done <"$out/$1.stats"; echo "$n"; }
 # wait_after SECONDS ROLE MARK CONDITION: the lever has printed 2 status lines past line MARK, and its newest
 # satisfies the condition
 wait_after() {
@@ -201,12 +200,7 @@ check "and the HSI's guard says so" has_text "$out/hsi.err" "loop has not steppe
 check "and the TOP's guard says so" has_text "$out/top.err" "loop has not stepped for"
 check "and the TOP latched TIMING" wait_for 5 top '.faults | index("timing") != null'
 check "and the HSI latched TIMING" wait_for 5 hsi '.faults | index("timing") != null'
-if [[ $(last_stat top '.faults | index("encoder") != null') == true ||
-  $(last_stat hsi '.faults | index("encoder") != null') == true ]]; then
-  rehome "the spin, a count lost"
-else
-  rearm "after the spin"
-fi
+recover "after the spin"
 
 # 5. The TOP's PWM channel unexported under lever-fw: its writes fail; the controller itself runs on at its last
 # state, so the safe state is the driver's enable line going low, which PwmMotor does in the command whose write
