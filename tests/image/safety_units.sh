@@ -61,8 +61,6 @@ check "the TOP's guard runs with them: $(journalctl -u lever-fw@top -o cat | gre
   journal_has top "motor guard pid [0-9]*: deadline $guard_deadline_ms ms, checked every $guard_check_ms ms, SCHED_FIFO 81"
 
 # 0. A process spinning at the loops' own priority on the one CPU, 100 ms by its own clock.
-main_pid hsi
-main_pid top
 poll_rt on
 check "before the spin: both motors on" until_on 5 hsi top
 spin_and_time "a FIFO 80 process spins 100 ms: its guard" "$guard_ms"

@@ -260,8 +260,8 @@ until_on() {
 # steps (a FIFO process that lowers itself to 80 runs at the head of that priority, and it never blocks), so each
 # loop's last step, from which its guard counts, came before it. This shell forks it from SCHED_FIFO 99 and waits for
 # it without polling: a poller above the guards (81) would delay them by its own polls. The motors' times come from
-# the kernel's stamps (off_time). Not traced: the loops' sched_switch events, which would time from the last step
-# itself; enabled around the spin they lost the events near it, the mark included, in four of six runs in the rig.
+# the kernel's stamps (off_time). The loops' sched_switch events, which would time from the last step itself, are
+# not traced: in the rig that tracing lost the events near the spin (docs/hil-serve.md).
 spin_and_time() {
   local name=$1 max=$2 role spin_t0 forked
   chrt -f -p 99 $$ >/dev/null
