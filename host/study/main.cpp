@@ -4,9 +4,11 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -38,6 +40,17 @@ struct SimulateOptions {
   std::uint64_t seed = 1;
   Format format = Format::text;
   study::ThreeIfcConfig config;
+};
+
+struct SessionOptions {
+  std::string protocol = "3ifc";
+  std::string subject = "sim";
+  std::uint64_t seed = 1;
+  std::string log;
+  bool resume = false;
+  double threshold = 0.12;
+  double slope = 3.0;
+  double lapse = 0.02;
 };
 
 struct ReportOptions {
@@ -174,6 +187,53 @@ int simulate(const SimulateOptions& o) {
   return 0;
 }
 
+// A whole session answered by a simulated observer and written to a session log as a runner writes one, so the
+// log's format, its resume and `report` can be tried without a pair.
+int simulated_session(const SessionOptions& o) {
+  try {
+    std::unique_ptr<study::Procedure> procedure;
+    std::optional<study::SessionLogWriter> writer;
+    int attempt = 0;
+    if (o.resume) {
+      const auto log = study::read_session_log(o.log);
+      for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
+      if (!log.header.simulated) return fail(2, fmt::format("{}: not a simulated session", program::printable(o.log)));
+      procedure = study::resume(log);
+      writer.emplace(study::SessionLogWriter::resume(o.log, log));
+      attempt = static_cast<int>(log.records.size());
+    } else {
+      const study::SessionHeader header{
+          o.protocol, o.subject, o.seed, true,
+          o.protocol == "3ifc" ? study::to_json(study::ThreeIfcConfig{}) : study::to_json(study::RatingConfig{})};
+      procedure = study::make_procedure(header);
+      writer.emplace(study::SessionLogWriter::create(o.log, header));
+    }
+    // The observer's own stream, apart from the procedure's; a resumed session draws a new one from where it resumed.
+    lever::Rng rng(o.seed ^ (0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(attempt + 1)));
+    const study::WeibullObserver detector{o.threshold, o.slope, o.lapse};
+    const study::RatingObserver rater;
+    while (!procedure->done()) {
+      const study::Trial t = procedure->current();
+      auto record = study::record_of(t, ++attempt);
+      if (t.takes_answer()) {
+        const int answer = t.kind == study::Kind::three_ifc ? detector.answer(t, rng) : rater.rate(t, rng);
+        record.answer = answer;
+        if (t.kind == study::Kind::three_ifc) record.right = answer == t.carrier;
+        writer->append(record);
+        procedure->answer(answer);
+      } else {
+        writer->append(record);
+        procedure->acknowledge();
+      }
+    }
+    fmt::print("lever-study: SIMULATED session of {} ({}) written to {}: {} records\n", program::printable(o.subject),
+               procedure->protocol(), program::printable(o.log), attempt);
+    return 0;
+  } catch (const study::SessionLogError& e) {
+    return fail(2, program::printable(e.what()));
+  }
+}
+
 struct SubjectThreshold {
   std::string log, subject;
   bool simulated = false;
@@ -248,10 +308,12 @@ int report(const ReportOptions& o) {
       }
     }
     if (complete > 0)
-      fmt::print(
-          "{} complete: above 10 %: {} ({:.0f} %), above 11 %: {} ({:.0f} %)  (! a pass ended at its trial "
-          "limit)\n",
-          complete, above10, 100.0 * above10 / complete, above11, 100.0 * above11 / complete);
+      fmt::print("{} complete: above 10 %: {} ({:.0f} %), above 11 %: {} ({:.0f} %)\n", complete, above10,
+                 100.0 * above10 / complete, above11, 100.0 * above11 / complete);
+    if (std::any_of(thresholds.begin(), thresholds.end(), [](const auto& t) {
+          return std::any_of(t.passes.begin(), t.passes.end(), [](const auto& pass) { return !pass.reached; });
+        }))
+      fmt::print("! a pass that ended at its trial limit, not by three right answers in a row\n");
   }
   if (!ratings.empty()) {
     fmt::print("ratings against p (Fig. 11)\n{:<9} {:>7} {:>4} {:>6} {:>6}\n", "direction", "p", "n", "mean", "sd");
@@ -311,6 +373,30 @@ int main(int argc, char** argv) {
                   "a pass that has not stopped after this many trials ends, not reached (not the paper's; 60)")
       ->check(program::whole(1, 10000));
 
+  SessionOptions so;
+  CLI::App* ses = app.add_subcommand(
+      "simulate-session", "one whole session answered by a simulated observer, written to a session log (or resumed)");
+  ses->add_option("--protocol", so.protocol, "3ifc or rating")
+      ->check(CLI::IsMember({"3ifc", "rating"}))
+      ->default_str("3ifc");
+  ses->add_option("--log", so.log, "the session log to write (refused if it exists, unless --resume)")
+      ->required()
+      ->check(program::path());
+  ses->add_flag("--resume", so.resume, "go on with the session in --log from its last complete record");
+  ses->add_option("--subject", so.subject, "the subject's name in the log")->default_str("sim");
+  ses->add_option("--seed", so.seed, "the seed of the procedure (in the log) and the observer")
+      ->check(program::seed())
+      ->default_str("1");
+  ses->add_option("--threshold", so.threshold, "3ifc: the observer's threshold (Weibull alpha)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}))
+      ->default_str("0.12");
+  ses->add_option("--slope", so.slope, "3ifc: the Weibull slope beta")
+      ->check(program::number({0.0, 100.0, true, false, "a slope"}))
+      ->default_str("3");
+  ses->add_option("--lapse", so.lapse, "3ifc: the lapse rate lambda")
+      ->check(program::number({0.0, 0.5, false, true, "a rate"}))
+      ->default_str("0.02");
+
   ReportOptions r;
   const program::Choices<Table> tables{{"thresholds", Table::thresholds}, {"ratings", Table::ratings}};
   CLI::App* rep =
@@ -326,5 +412,6 @@ int main(int argc, char** argv) {
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
   if (sim->parsed()) return simulate(s);
+  if (ses->parsed()) return simulated_session(so);
   return report(r);
 }

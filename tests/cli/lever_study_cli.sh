@@ -46,6 +46,31 @@ check "report of a log cut mid-line: exit 0 (got $code)" test "$code" -eq 0
 check "report: the cut line is a warning" grep -q "warning: .*line 3" "$work/report.err"
 check "report: the simulated session is labelled" grep -q "SIMULATED" "$work/report"
 
+# A simulated session written whole, then the same cut by a "kill" mid-line and resumed: every complete record
+# before the cut is kept as it was, the session ends, and report reads both.
+"$study" simulate-session --log "$work/whole.jsonl" --subject sim01 --seed 4 >/dev/null; code=$?
+check "simulate-session: exit 0 (got $code)" test "$code" -eq 0
+check "simulate-session: the header says simulated" grep -q '"simulated":true' <(head -1 "$work/whole.jsonl")
+cp "$work/whole.jsonl" "$work/cut.jsonl"
+keep=$(head -n 12 "$work/whole.jsonl" | wc -c)
+truncate -s $((keep + 30)) "$work/cut.jsonl"
+"$study" simulate-session --log "$work/cut.jsonl" --resume --seed 4 >/dev/null 2>"$work/resume.err"; code=$?
+check "simulate-session --resume of a cut log: exit 0 (got $code)" test "$code" -eq 0
+check "--resume: the cut line is a warning" grep -q "warning: .*line 13" "$work/resume.err"
+check "--resume: the twelve complete lines are kept byte for byte" \
+  cmp -s <(head -n 12 "$work/whole.jsonl") <(head -n 12 "$work/cut.jsonl")
+check "--resume: no cut line left in the log" \
+  python3 -c 'import json,sys; [json.loads(l) for l in open(sys.argv[1])]' "$work/cut.jsonl"
+"$study" simulate-session --protocol rating --log "$work/rating.jsonl" --subject sim02 >/dev/null
+"$study" report "$work/whole.jsonl" "$work/cut.jsonl" "$work/rating.jsonl" >"$work/report2"; code=$?
+check "report of three simulated logs: exit 0 (got $code)" test "$code" -eq 0
+check "report: two subjects' thresholds" test "$(grep -c '^sim01 \*' "$work/report2")" -eq 2
+check "report: ratings of both directions" test "$(grep -cE '^(velocity|force) ' "$work/report2")" -eq 24
+"$study" report --format csv --table ratings "$work/rating.jsonl" >"$work/ratings.csv"
+check "report --table ratings: a header and 24 rows" test "$(wc -l <"$work/ratings.csv")" -eq 25
+expect_bad "simulate-session over an existing log" "cannot be created" simulate-session --log "$work/whole.jsonl"
+expect_bad "simulate-session --protocol other" "--protocol" simulate-session --log "$work/x.jsonl" --protocol other
+
 expect_bad "no subcommand" "subcommand"
 expect_bad "misspelt subcommand" "unknown subcommand 'simulat'" simulat
 expect_bad "--sessions 0" "--sessions must be a whole number in [1, 10000000], got 0" simulate --sessions 0

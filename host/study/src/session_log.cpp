@@ -18,8 +18,8 @@ namespace lever::study {
 namespace {
 
 template <typename T>
-nlohmann::json or_null(const std::optional<T>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+nlohmann::ordered_json or_null(const std::optional<T>& v) {
+  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
 }
 
 template <typename T>
@@ -45,13 +45,14 @@ TrialRecord record_of(const Trial& t, int attempt) {
   return r;
 }
 
-nlohmann::json to_json(const SessionHeader& h) {
-  return {{"record", "session"}, {"format", kLogFormat},     {"protocol", h.protocol}, {"subject", h.subject},
-          {"seed", h.seed},      {"simulated", h.simulated}, {"config", h.config}};
+nlohmann::ordered_json to_json(const SessionHeader& h) {
+  return nlohmann::ordered_json{{"record", "session"},  {"format", kLogFormat}, {"protocol", h.protocol},
+                                {"subject", h.subject}, {"seed", h.seed},       {"simulated", h.simulated},
+                                {"config", h.config}};
 }
 
-nlohmann::json to_json(const TrialRecord& r) {
-  nlohmann::json intervals = nlohmann::json::array();
+nlohmann::ordered_json to_json(const TrialRecord& r) {
+  nlohmann::ordered_json intervals = nlohmann::ordered_json::array();
   for (const auto& i : r.intervals)
     intervals.push_back({{"p_velocity", i.interval.p_velocity},
                          {"p_force", i.interval.p_force},
@@ -61,18 +62,19 @@ nlohmann::json to_json(const TrialRecord& r) {
                          {"frames_velocity", or_null(i.frames_velocity)},
                          {"frames_force", or_null(i.frames_force)},
                          {"confirmed", i.confirmed}});
-  return {{"record", "trial"},
-          {"attempt", r.attempt},
-          {"kind", std::string(name(r.kind))},
-          {"pass", r.pass},
-          {"trial", r.trial},
-          {"p", r.p},
-          {"direction", std::string(name(r.direction))},
-          {"carrier", r.carrier > 0 ? nlohmann::json(r.carrier) : nlohmann::json(nullptr)},
-          {"answer", or_null(r.answer)},
-          {"right", or_null(r.right)},
-          {"void", or_null(r.void_reason)},
-          {"intervals", intervals}};
+  return nlohmann::ordered_json{
+      {"record", "trial"},
+      {"attempt", r.attempt},
+      {"kind", std::string(name(r.kind))},
+      {"pass", r.pass},
+      {"trial", r.trial},
+      {"p", r.p},
+      {"direction", std::string(name(r.direction))},
+      {"carrier", r.carrier > 0 ? nlohmann::ordered_json(r.carrier) : nlohmann::ordered_json(nullptr)},
+      {"answer", or_null(r.answer)},
+      {"right", or_null(r.right)},
+      {"void", or_null(r.void_reason)},
+      {"intervals", intervals}};
 }
 
 SessionHeader header_from_json(const nlohmann::json& j) {

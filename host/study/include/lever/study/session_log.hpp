@@ -52,8 +52,9 @@ struct TrialRecord {
 // The record of a trial as presented: the procedure's side filled in, the runner's null.
 TrialRecord record_of(const Trial& t, int attempt);
 
-nlohmann::json to_json(const SessionHeader& h);
-nlohmann::json to_json(const TrialRecord& r);
+// In the order docs/study.md lists the fields, so a log reads as the page does.
+nlohmann::ordered_json to_json(const SessionHeader& h);
+nlohmann::ordered_json to_json(const TrialRecord& r);
 SessionHeader header_from_json(const nlohmann::json& j);
 TrialRecord record_from_json(const nlohmann::json& j);
 
