@@ -187,3 +187,49 @@ TEST_CASE("log: a rating session's records round-trip and resume", "[unit][study
   CHECK(resumed.ratings().size() == 6);
   CHECK(same_trial(resumed.current(), r.current()));
 }
+
+TEST_CASE("log: the runner's fields of a record survive the round trip", "[unit][study]") {
+  study::ThreeIfcStaircase s({}, 1);
+  s.acknowledge();
+  auto r = study::record_of(s.current(), 2);
+  r.void_reason = "fault: TOP motor";
+  r.intervals[1].start_bus_us = 1'000'000;
+  r.intervals[1].end_bus_us = 21'000'000;
+  r.intervals[1].frames_velocity = 5012;
+  r.intervals[1].frames_force = 1234;
+  r.intervals[1].confirmed = {{"hsi", {{"p", 0.025}}}, {"top", {{"p", 0.025}}}};
+  const auto back = study::record_from_json(nlohmann::json::parse(study::to_json(r).dump()));
+  CHECK(back.void_reason == r.void_reason);
+  CHECK(back.carrier == r.carrier);
+  REQUIRE(back.intervals.size() == 3);
+  CHECK(back.intervals[1].interval == r.intervals[1].interval);
+  CHECK(back.intervals[1].start_bus_us == 1'000'000);
+  CHECK(back.intervals[1].end_bus_us == 21'000'000);
+  CHECK(back.intervals[1].frames_velocity == 5012u);
+  CHECK(back.intervals[1].frames_force == 1234u);
+  CHECK(back.intervals[1].confirmed == r.intervals[1].confirmed);
+  CHECK_FALSE(back.intervals[0].frames_velocity);
+  CHECK(back.intervals[0].confirmed.is_null());
+}
+
+TEST_CASE("log: the header's config makes the same procedure; a config out of range is refused", "[unit][study]") {
+  study::ThreeIfcConfig c;
+  c.step = 0.02;
+  c.direction = study::Direction::velocity;
+  c.interval_s = 4.0;
+  const auto back = study::three_ifc_config_from_json(nlohmann::json::parse(study::to_json(c).dump()));
+  CHECK(back.step == 0.02);
+  CHECK(back.direction == study::Direction::velocity);
+  CHECK(back.interval_s == 4.0);
+  CHECK(back.start_p == c.start_p);
+  study::RatingConfig rc;
+  rc.runs = {study::Direction::force};
+  rc.values = {0.0, 0.1};
+  const auto rback = study::rating_config_from_json(study::to_json(rc));
+  CHECK(rback.runs == rc.runs);
+  CHECK(rback.values == rc.values);
+  CHECK_THROWS_AS(study::make_procedure({"3ifc", "s", 1, false, {{"step", -1}}}), study::SessionLogError);
+  CHECK_THROWS_AS(study::make_procedure({"3ifc", "s", 1, false, {{"direction", "up"}}}), study::SessionLogError);
+  CHECK_THROWS_AS(study::make_procedure({"rating", "s", 1, false, {{"values", "none"}}}), study::SessionLogError);
+  CHECK_THROWS_AS(study::make_procedure({"staircase", "s", 1, false, {}}), study::SessionLogError);
+}
