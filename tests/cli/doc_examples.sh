@@ -56,7 +56,7 @@ for doc in "$src/README.md" "$src"/docs/*.md; do
       done < <(grep -oE '"[a-z_]+":[-0-9.e+]+(\.\.\.)?' <<<"${line#\# }")
       continue
     fi
-    [[ $line =~ ^(build/bin/)?lever-(codec|hil|fw|fw-sim|bridge|plot)\  ]] || continue
+    [[ $line =~ ^(build/bin/)?lever-(codec|hil|fw|fw-sim|bridge|plot|study)\  ]] || continue
     examples=$((examples + 1))
     if is_synopsis "${line%%#*}"; then skipped=$((skipped + 1)); continue; fi
     if [ -n "${skip[$line]+x}" ]; then

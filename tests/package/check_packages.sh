@@ -65,7 +65,7 @@ for pkg in lever-fw lever-bridge lever-tools; do
   dpkg_root -i "$dist/${pkg}_"*"_$arch.deb" >"$work/dpkg" 2>&1
   check "install $pkg into a throw-away root: $(tail -n3 "$work/dpkg" | tr '\n' ' ')" test $? -eq 0
 done
-for file in /usr/bin/lever-fw /usr/bin/lever-bridge /usr/bin/lever-codec /usr/bin/lever-hil /usr/bin/lever-ctl /usr/bin/lever-view /usr/bin/lever-plot \
+for file in /usr/bin/lever-fw /usr/bin/lever-bridge /usr/bin/lever-codec /usr/bin/lever-hil /usr/bin/lever-ctl /usr/bin/lever-view /usr/bin/lever-plot /usr/bin/lever-study \
   /etc/lever/top.toml /etc/lever/hsi.toml /etc/lever/top-float32.toml /etc/lever/bridge-example.toml \
   /lib/systemd/system/lever-fw@.service /lib/systemd/system/lever-bridge@.service \
   /lib/udev/rules.d/60-lever-gpio-pwm.rules /usr/share/doc/lever-fw/copyright \

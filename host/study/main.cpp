@@ -1,0 +1,417 @@
+// lever-study: the paper's user-study procedures off the bench. `simulate` runs the 3IFC staircase many times for a
+// simulated observer of known threshold and reports what it estimates; `report` summarises session logs as the
+// paper's Fig. 7 and Fig. 11 do (docs/study.md).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lever/program/choices.hpp"
+#include "lever/program/numbers.hpp"
+#include "lever/program/parse.hpp"
+#include "lever/program/text.hpp"
+#include "lever/study/observer.hpp"
+#include "lever/study/rating.hpp"
+#include "lever/study/session_log.hpp"
+#include "lever/study/three_ifc.hpp"
+
+namespace {
+
+namespace program = lever::program;
+namespace study = lever::study;
+using Clock = std::chrono::steady_clock;
+
+enum class Format { text, json, csv };
+enum class Table { thresholds, ratings };
+
+struct SimulateOptions {
+  std::vector<double> thresholds{0.05, 0.10, 0.15};
+  double slope = 3.0;
+  double lapse = 0.02;
+  int sessions = 1000;
+  std::uint64_t seed = 1;
+  Format format = Format::text;
+  study::ThreeIfcConfig config;
+};
+
+struct SessionOptions {
+  std::string protocol = "3ifc";
+  std::string subject = "sim";
+  std::uint64_t seed = 1;
+  std::string log;
+  bool resume = false;
+  double threshold = 0.12;
+  double slope = 3.0;
+  double lapse = 0.02;
+};
+
+struct ReportOptions {
+  std::vector<std::string> logs;
+  Format format = Format::text;
+  Table table = Table::thresholds;
+};
+
+int fail(int code, const std::string& message) {
+  fmt::print(stderr, "lever-study: {}\n", message);
+  return code;
+}
+
+nlohmann::json spread_json(const study::Spread& s, double truth) {
+  return {{"n", s.n},
+          {"median", s.median},
+          {"q1", s.q1},
+          {"q3", s.q3},
+          {"iqr", s.iqr()},
+          {"mean", s.mean},
+          {"sd", s.sd},
+          {"min", s.min},
+          {"max", s.max},
+          {"bias_median", s.median - truth},
+          {"bias_mean", s.mean - truth}};
+}
+
+// A progress line on stderr once a run has taken a second, so a long run shows it is alive; none on short ones.
+class Progress {
+ public:
+  explicit Progress(long total) : total_(total), tty_(::isatty(STDERR_FILENO) == 1) {}
+  void update(long done) {
+    const auto now = Clock::now();
+    if (now - start_ < std::chrono::seconds(1) || now - last_ < std::chrono::milliseconds(500)) return;
+    last_ = now;
+    shown_ = true;
+    fmt::print(stderr, "{}lever-study: simulated {}/{} sessions{}", tty_ ? "\r" : "", done, total_, tty_ ? "" : "\n");
+  }
+  ~Progress() {
+    if (shown_ && tty_) fmt::print(stderr, "\n");
+  }
+
+ private:
+  long total_;
+  bool tty_;
+  bool shown_ = false;
+  Clock::time_point start_ = Clock::now(), last_{};
+};
+
+int simulate(const SimulateOptions& o) {
+  try {
+    study::check(o.config);
+  } catch (const std::invalid_argument& e) {
+    return fail(2, e.what());
+  }
+  nlohmann::json results = nlohmann::json::array();
+  Progress progress(static_cast<long>(o.sessions) * static_cast<long>(o.thresholds.size()));
+  long done = 0;
+  lever::Rng seeder(o.seed);
+  for (const double threshold : o.thresholds) {
+    const study::WeibullObserver observer{threshold, o.slope, o.lapse};
+    std::vector<double> per_pass[3], overall;
+    int not_reached = 0;
+    long trials = 0;
+    for (int s = 0; s < o.sessions; ++s) {
+      const auto run = study::simulate_three_ifc(o.config, observer, seeder.next());
+      for (std::size_t i = 0; i < run.passes.size() && i < 3; ++i) per_pass[i].push_back(run.passes[i].p);
+      overall.push_back(run.threshold.value_or(0.0));
+      if (!run.reached) ++not_reached;
+      trials += run.trials;
+      progress.update(++done);
+    }
+    nlohmann::json passes = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) {
+      auto j = spread_json(study::spread_of(per_pass[i]), threshold);
+      j["pass"] = i + 1;
+      passes.push_back(j);
+    }
+    results.push_back({{"threshold", threshold},
+                       {"p_right_at_threshold", observer.p_right(threshold)},
+                       {"trials_mean", static_cast<double>(trials) / o.sessions},
+                       {"not_reached", not_reached},
+                       {"passes", passes},
+                       {"overall", spread_json(study::spread_of(overall), threshold)}});
+  }
+  const nlohmann::json observer = {{"model", "weibull"}, {"slope", o.slope}, {"lapse", o.lapse}, {"guess", 1.0 / 3.0}};
+  const char* label = "SIMULATED observers, not data: they reproduce nothing of the paper's Fig. 7";
+  if (o.format == Format::json) {
+    fmt::print("{}\n", nlohmann::json{{"simulated", true},
+                                      {"note", label},
+                                      {"observer", observer},
+                                      {"procedure", study::to_json(o.config)},
+                                      {"sessions", o.sessions},
+                                      {"seed", o.seed},
+                                      {"results", results}}
+                           .dump(2));
+    return 0;
+  }
+  if (o.format == Format::csv) {
+    fmt::print(
+        "simulated,threshold,slope,lapse,sessions,estimate,n,median,q1,q3,iqr,mean,sd,bias_median,bias_mean,"
+        "not_reached,trials_mean\n");
+    for (const auto& r : results) {
+      const auto row = [&](const std::string& what, const nlohmann::json& s) {
+        fmt::print("true,{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r["threshold"].get<double>(), o.slope,
+                   o.lapse, o.sessions, what, s["n"].get<int>(), s["median"].get<double>(), s["q1"].get<double>(),
+                   s["q3"].get<double>(), s["iqr"].get<double>(), s["mean"].get<double>(), s["sd"].get<double>(),
+                   s["bias_median"].get<double>(), s["bias_mean"].get<double>(), r["not_reached"].get<int>(),
+                   r["trials_mean"].get<double>());
+      };
+      for (const auto& pass : r["passes"]) row(fmt::format("pass{}", pass["pass"].get<int>()), pass);
+      row("threshold", r["overall"]);
+    }
+    return 0;
+  }
+  fmt::print("{}\n", label);
+  fmt::print("observer: Weibull, guess 1/3, slope {}, lapse {}; {} sessions a threshold, seed {}\n",
+             program::short_number(o.slope), program::short_number(o.lapse), o.sessions, o.seed);
+  fmt::print("{:>9}  {:>9}  {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}  {:>8} {:>8}  {:>11}  {:>6}\n", "threshold", "estimate",
+             "median", "q1", "q3", "IQR", "mean", "sd", "bias med", "bias mean", "not reached", "trials");
+  for (const auto& r : results) {
+    const auto row = [&](const std::string& what, const nlohmann::json& s) {
+      fmt::print(
+          "{:>8.2f}%  {:>9}  {:>6.2f}% {:>6.2f}% {:>6.2f}% {:>6.2f}% {:>6.2f}% {:>6.2f}%  {:>+7.2f}% {:>+8.2f}%  "
+          "{:>11}  {:>6.1f}\n",
+          100 * r["threshold"].get<double>(), what, 100 * s["median"].get<double>(), 100 * s["q1"].get<double>(),
+          100 * s["q3"].get<double>(), 100 * s["iqr"].get<double>(), 100 * s["mean"].get<double>(),
+          100 * s["sd"].get<double>(), 100 * s["bias_median"].get<double>(), 100 * s["bias_mean"].get<double>(),
+          r["not_reached"].get<int>(), r["trials_mean"].get<double>());
+    };
+    for (const auto& pass : r["passes"]) row(fmt::format("pass {}", pass["pass"].get<int>()), pass);
+    row("threshold", r["overall"]);
+  }
+  return 0;
+}
+
+// A whole session answered by a simulated observer and written to a session log as a runner writes one, so the
+// log's format, its resume and `report` can be tried without a pair.
+int simulated_session(const SessionOptions& o) {
+  try {
+    std::unique_ptr<study::Procedure> procedure;
+    std::optional<study::SessionLogWriter> writer;
+    int attempt = 0;
+    if (o.resume) {
+      const auto log = study::read_session_log(o.log);
+      for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
+      if (!log.header.simulated) return fail(2, fmt::format("{}: not a simulated session", program::printable(o.log)));
+      procedure = study::resume(log);
+      writer.emplace(study::SessionLogWriter::resume(o.log, log));
+      attempt = static_cast<int>(log.records.size());
+    } else {
+      const study::SessionHeader header{
+          o.protocol, o.subject, o.seed, true,
+          o.protocol == "3ifc" ? study::to_json(study::ThreeIfcConfig{}) : study::to_json(study::RatingConfig{})};
+      procedure = study::make_procedure(header);
+      writer.emplace(study::SessionLogWriter::create(o.log, header));
+    }
+    // The observer's own stream, apart from the procedure's; a resumed session draws a new one from where it resumed.
+    lever::Rng rng(o.seed ^ (0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(attempt + 1)));
+    const study::WeibullObserver detector{o.threshold, o.slope, o.lapse};
+    const study::RatingObserver rater;
+    while (!procedure->done()) {
+      const study::Trial t = procedure->current();
+      auto record = study::record_of(t, ++attempt);
+      if (t.takes_answer()) {
+        const int answer = t.kind == study::Kind::three_ifc ? detector.answer(t, rng) : rater.rate(t, rng);
+        record.answer = answer;
+        if (t.kind == study::Kind::three_ifc) record.right = answer == t.carrier;
+        writer->append(record);
+        procedure->answer(answer);
+      } else {
+        writer->append(record);
+        procedure->acknowledge();
+      }
+    }
+    fmt::print("lever-study: SIMULATED session of {} ({}) written to {}: {} records\n", program::printable(o.subject),
+               procedure->protocol(), program::printable(o.log), attempt);
+    return 0;
+  } catch (const study::SessionLogError& e) {
+    return fail(2, program::printable(e.what()));
+  }
+}
+
+struct SubjectThreshold {
+  std::string log, subject;
+  bool simulated = false;
+  std::vector<study::PassResult> passes;
+  std::optional<double> threshold;
+  bool reached = false;
+};
+
+int report(const ReportOptions& o) {
+  std::vector<SubjectThreshold> thresholds;
+  struct Cell {
+    std::vector<double> ratings;
+    bool simulated = false;
+  };
+  std::map<std::pair<std::string, double>, Cell> ratings;  // (direction, p)
+  bool any_simulated = false;
+  for (const auto& path : o.logs) {
+    try {
+      const auto log = study::read_session_log(path);
+      for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
+      any_simulated = any_simulated || log.header.simulated;
+      const auto procedure = study::resume(log);
+      if (const auto* s = dynamic_cast<const study::ThreeIfcStaircase*>(procedure.get())) {
+        thresholds.push_back(
+            {path, log.header.subject, log.header.simulated, s->passes(), s->threshold(), s->reached()});
+      } else if (const auto* r = dynamic_cast<const study::RatingRun*>(procedure.get())) {
+        for (const auto& rating : r->ratings()) {
+          auto& cell = ratings[{std::string(study::name(rating.direction)), rating.p}];
+          cell.ratings.push_back(rating.rating);
+          cell.simulated = cell.simulated || log.header.simulated;
+        }
+      }
+    } catch (const study::SessionLogError& e) {
+      return fail(2, program::printable(e.what()));
+    }
+  }
+  const auto pass_p = [](const SubjectThreshold& t, std::size_t i) {
+    return i < t.passes.size() ? fmt::format("{}", t.passes[i].p) : std::string();
+  };
+  if (o.format == Format::csv) {
+    if (o.table == Table::thresholds) {
+      fmt::print("log,subject,simulated,pass1,pass2,pass3,threshold,complete,reached\n");
+      for (const auto& t : thresholds)
+        fmt::print("{},{},{},{},{},{},{},{},{}\n", program::printable(t.log), program::printable(t.subject),
+                   t.simulated, pass_p(t, 0), pass_p(t, 1), pass_p(t, 2),
+                   t.threshold ? fmt::format("{}", *t.threshold) : "", t.threshold.has_value(), t.reached);
+    } else {
+      fmt::print("direction,p,simulated,n,mean,sd,min,max\n");
+      for (const auto& [key, cell] : ratings) {
+        const auto s = study::spread_of(cell.ratings);
+        fmt::print("{},{},{},{},{},{},{},{}\n", key.first, key.second, cell.simulated, s.n, s.mean, s.sd, s.min, s.max);
+      }
+    }
+    return 0;
+  }
+  if (any_simulated) fmt::print("SIMULATED sessions among these logs (marked *): they are not data\n");
+  if (!thresholds.empty()) {
+    fmt::print("3IFC detection thresholds (Fig. 7)\n{:<16} {:>8} {:>8} {:>8} {:>10}\n", "subject", "pass 1", "pass 2",
+               "pass 3", "threshold");
+    int complete = 0, above10 = 0, above11 = 0;
+    for (const auto& t : thresholds) {
+      const auto cell = [&](std::size_t i) {
+        return i < t.passes.size() ? fmt::format("{:.2f}%{}", 100 * t.passes[i].p, t.passes[i].reached ? "" : "!")
+                                   : std::string("-");
+      };
+      fmt::print("{:<16} {:>8} {:>8} {:>8} {:>10}\n", program::printable(t.subject) + (t.simulated ? " *" : ""),
+                 cell(0), cell(1), cell(2), t.threshold ? fmt::format("{:.2f}%", 100 * *t.threshold) : "incomplete");
+      if (t.threshold) {
+        ++complete;
+        above10 += *t.threshold > 0.10 + 1e-9;
+        above11 += *t.threshold > 0.11 + 1e-9;
+      }
+    }
+    if (complete > 0)
+      fmt::print("{} complete: above 10 %: {} ({:.0f} %), above 11 %: {} ({:.0f} %)\n", complete, above10,
+                 100.0 * above10 / complete, above11, 100.0 * above11 / complete);
+    if (std::any_of(thresholds.begin(), thresholds.end(), [](const auto& t) {
+          return std::any_of(t.passes.begin(), t.passes.end(), [](const auto& pass) { return !pass.reached; });
+        }))
+      fmt::print("! a pass that ended at its trial limit, not by three right answers in a row\n");
+  }
+  if (!ratings.empty()) {
+    fmt::print("ratings against p (Fig. 11)\n{:<9} {:>7} {:>4} {:>6} {:>6}\n", "direction", "p", "n", "mean", "sd");
+    for (const auto& [key, cell] : ratings) {
+      const auto s = study::spread_of(cell.ratings);
+      fmt::print("{:<9} {:>6.1f}% {:>4} {:>6.2f} {:>6.2f}{}\n", key.first, 100 * key.second, s.n, s.mean, s.sd,
+                 cell.simulated ? " *" : "");
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3) off the bench: simulate runs the\n"
+      "3IFC detection-threshold staircase for simulated observers of known threshold and reports the bias and\n"
+      "spread of what it estimates; report summarises session logs (docs/study.md)."};
+  program::describe(app, "lever-study");
+  app.footer(
+      "Exit status: 0 done; 1 a runtime failure; 2 bad input (an option, a session log that is missing, damaged,\n"
+      "or does not match its own config and seed).");
+  const program::Choices<Format> formats{{"text", Format::text}, {"json", Format::json}, {"csv", Format::csv}};
+
+  SimulateOptions s;
+  CLI::App* sim =
+      app.add_subcommand("simulate", "N simulated 3IFC sessions per threshold: the staircase's bias and spread");
+  sim->add_option("--thresholds", s.thresholds, "the simulated observers' thresholds (Weibull alpha), comma-separated")
+      ->delimiter(',')
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}))
+      ->default_str("0.05,0.10,0.15");
+  sim->add_option("--slope", s.slope, "the Weibull slope beta")
+      ->check(program::number({0.0, 100.0, true, false, "a slope"}))
+      ->default_str("3");
+  sim->add_option("--lapse", s.lapse, "the lapse rate lambda")
+      ->check(program::number({0.0, 0.5, false, true, "a rate"}))
+      ->default_str("0.02");
+  sim->add_option("--sessions", s.sessions, "sessions per threshold")
+      ->check(program::whole(1, 10000000))
+      ->default_str("1000");
+  sim->add_option("--seed", s.seed, "the seed of every session's procedure and observer")
+      ->check(program::seed())
+      ->default_str("1");
+  sim->add_option("--format", s.format, "text, json or csv")->transform(program::one_of(formats))->default_str("text");
+  sim->add_option("--start-p", s.config.start_p, "p of a pass's first trial (paper: 0.025)")
+      ->check(program::number(program::kWeberFraction));
+  sim->add_option("--step", s.config.step, "the rise of p after a wrong answer (our reading: 0.025)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  sim->add_option("--max-p", s.config.max_p, "the largest p (paper: 0.25)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  sim->add_option("--right-in-a-row", s.config.right_in_a_row, "right answers in a row that end a pass (paper: 3)")
+      ->check(program::whole(1, 100));
+  sim->add_option("--pass3-factor", s.config.pass3_factor, "pass 3 starts at this times pass 2's result (paper: 0.5)")
+      ->check(program::number({0.0, 1.0, true, false, "a factor"}));
+  sim->add_option("--max-trials-per-pass", s.config.max_trials_per_pass,
+                  "a pass that has not stopped after this many trials ends, not reached (not the paper's; 60)")
+      ->check(program::whole(1, 10000));
+
+  SessionOptions so;
+  CLI::App* ses = app.add_subcommand(
+      "simulate-session", "one whole session answered by a simulated observer, written to a session log (or resumed)");
+  ses->add_option("--protocol", so.protocol, "3ifc or rating")
+      ->check(CLI::IsMember({"3ifc", "rating"}))
+      ->default_str("3ifc");
+  ses->add_option("--log", so.log, "the session log to write (refused if it exists, unless --resume)")
+      ->required()
+      ->check(program::path());
+  ses->add_flag("--resume", so.resume, "go on with the session in --log from its last complete record");
+  ses->add_option("--subject", so.subject, "the subject's name in the log")->default_str("sim");
+  ses->add_option("--seed", so.seed, "the seed of the procedure (in the log) and the observer")
+      ->check(program::seed())
+      ->default_str("1");
+  ses->add_option("--threshold", so.threshold, "3ifc: the observer's threshold (Weibull alpha)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}))
+      ->default_str("0.12");
+  ses->add_option("--slope", so.slope, "3ifc: the Weibull slope beta")
+      ->check(program::number({0.0, 100.0, true, false, "a slope"}))
+      ->default_str("3");
+  ses->add_option("--lapse", so.lapse, "3ifc: the lapse rate lambda")
+      ->check(program::number({0.0, 0.5, false, true, "a rate"}))
+      ->default_str("0.02");
+
+  ReportOptions r;
+  const program::Choices<Table> tables{{"thresholds", Table::thresholds}, {"ratings", Table::ratings}};
+  CLI::App* rep =
+      app.add_subcommand("report", "per-subject thresholds (Fig. 7) and ratings against p (Fig. 11) from session logs");
+  rep->add_option("logs", r.logs, "session logs (JSON Lines)")->required()->check(program::path());
+  rep->add_option("--format", r.format, "text or csv")
+      ->transform(program::one_of(program::Choices<Format>{{"text", Format::text}, {"csv", Format::csv}}))
+      ->default_str("text");
+  rep->add_option("--table", r.table, "with --format csv: thresholds or ratings")
+      ->transform(program::one_of(tables))
+      ->default_str("thresholds");
+  app.require_subcommand(1);
+
+  if (const auto stop = program::parse(app, argc, argv)) return *stop;
+  if (sim->parsed()) return simulate(s);
+  if (ses->parsed()) return simulated_session(so);
+  return report(r);
+}
