@@ -58,6 +58,7 @@ void BusWatch::take(const protocol::CanFrame& f, bool hsi_site, bool top_site, s
     }
     case protocol::MessageKind::command:
     case protocol::MessageKind::energy:
+    case protocol::MessageKind::settings:
       break;
   }
 }

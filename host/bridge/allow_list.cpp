@@ -53,7 +53,7 @@ AllowList AllowList::parse(std::string_view text) {
 AllowList AllowList::lever_protocol() {
   using namespace protocol;
   return parse(fmt::format("0x{:X}-0x{:X},0x{:X}-0x{:X},0x{:X}-0x{:X}", kCommandBase, kCommandBase + kPairCount - 1,
-                           kMotionBase, kEnergyBase + 2 * kPairCount - 1, kHeartbeatBase,
+                           kMotionBase, kSettingsBase + 2 * kPairCount - 1, kHeartbeatBase,
                            kHeartbeatBase + 2 * kPairCount - 1));
 }
 

@@ -1,5 +1,6 @@
-// lever-ctl: operates a lever pair over CAN. It sends a command frame, watches both levers' heartbeats and resends
-// until each lever of the pair shows the commanded state, or refuses it for a reason its heartbeat shows.
+// lever-ctl: operates a lever pair over CAN. It sends a command frame, watches both levers' heartbeats (and for
+// tare and set-deadband their settings frames) and resends until each lever the command is for shows the commanded
+// state or settings, or refuses it for a reason its heartbeat shows.
 #include <fmt/format.h>
 #include <poll.h>
 
@@ -32,8 +33,6 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kResendInterval = std::chrono::milliseconds(100);
 // A lever silent this long (ten heartbeats) is judged by no heartbeat at all, not by its last one.
 constexpr auto kHeartbeatFresh = std::chrono::milliseconds(250);
-// Unconfirmable commands: this many copies, kResendInterval apart, all within one tare (64 readings at 5 ms).
-constexpr int kUnconfirmedCopies = 3;
 
 struct Options {
   int pair = 0;
@@ -56,6 +55,8 @@ struct Lever {
   bool target = false;
   std::optional<protocol::HeartbeatMessage> last;
   Clock::time_point heard{};
+  std::optional<protocol::SettingsMessage> settings;         // the newest settings frame
+  std::optional<protocol::SettingsMessage> settings_before;  // the newest before the first copy went out
   std::optional<protocol::HeartbeatMessage> fresh(Clock::time_point now) const {
     if (last && now - heard <= kHeartbeatFresh) return last;
     return std::nullopt;
@@ -70,7 +71,7 @@ struct Lever {
 class Session {
  public:
   Session(Verb verb, const Options& o, lever::platform::SocketCan can)
-      : verb_(verb), options_(o), can_(std::move(can)) {
+      : verb_(verb), options_(o), can_(std::move(can)), command_(command(verb, o)) {
     const auto t = lever::ctl::targets(verb, o.direction);
     levers_[0].target = t.hsi;
     levers_[1].target = t.top;
@@ -80,46 +81,39 @@ class Session {
     const auto start = Clock::now();
     const double timeout_s = options_.timeout_s.value_or(verb_ == Verb::home ? 20.0 : 5.0);
     const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-    const bool confirmable = lever::ctl::confirmable(verb_);
     auto next_send = start;
-    int copies_left = kUnconfirmedCopies;
-    bool ready = confirmable;  // unconfirmable commands wait until their levers are up and accept them
     while (true) {
       const auto now = Clock::now();
       const Judgement j[2] = {judge(levers_[0], now), judge(levers_[1], now)};
-      for (int i = 0; i < 2; ++i)
-        if (levers_[i].target && j[i].outcome == Outcome::refused)
+      bool all_done = true;
+      for (int i = 0; i < 2; ++i) {
+        if (!levers_[i].target) continue;
+        if (j[i].outcome == Outcome::refused)
           return fail(1, fmt::format("{} pair {}: {} refused: {}", lever::ctl::verb_name(verb_), options_.pair,
                                      levers_[i].name, j[i].why));
-      const auto pending = lever::ctl::still_pending({levers_[0].target, levers_[1].target}, j[0], j[1]);
-      if (confirmable && !pending.hsi && !pending.top) {
+        all_done = all_done && j[i].outcome == Outcome::done;
+      }
+      if (all_done) {
         fmt::print("lever-ctl: {} pair {} on {}: done in {:.3f} s, {} command frame{}{}\n",
                    lever::ctl::verb_name(verb_), options_.pair, can_.interface(),
-                   std::chrono::duration<double>(now - start).count(), sent_, sent_ == 1 ? "" : "s", shown(j));
+                   std::chrono::duration<double>(now - start).count(), sent_, sent_ == 1 ? "" : "s", shown());
         return 0;
       }
-      if (!confirmable && !ready && !pending.hsi && !pending.top) {
-        ready = true;
-        next_send = now;
-      }
-      if (!confirmable && ready && copies_left == 0) {
-        fmt::print(
-            "lever-ctl: {} pair {} on {}: sent {} copies to {} (up and {}); not confirmed: the heartbeat "
-            "does not show {}\n",
-            lever::ctl::verb_name(verb_), options_.pair, can_.interface(), sent_, target_names(),
-            verb_ == Verb::tare ? "disarmed" : "heard", verb_ == Verb::tare ? "a tare" : "the deadband's parameters");
-        return 0;
-      }
-      if (now >= deadline) return timed_out(j, timeout_s, now);
-      if (now >= next_send && (confirmable ? true : ready)) {
+      if (now >= deadline) return timed_out(j, timeout_s);
+      const auto pending = lever::ctl::still_pending({levers_[0].target, levers_[1].target}, j[0], j[1]);
+      if (now >= next_send && ready()) {
         // The first copy goes to every target; a resend only to the levers not there yet.
-        const bool to_hsi = sent_ == 0 || !confirmable ? levers_[0].target : pending.hsi;
-        const bool to_top = sent_ == 0 || !confirmable ? levers_[1].target : pending.top;
-        if (const int code = send(to_hsi, to_top); code != 0) return code;
-        if (!confirmable) --copies_left;
+        const bool first = sent_ == 0;
+        if (first)
+          for (auto& lever : levers_) lever.settings_before = lever.settings;
+        if (first || pending.hsi || pending.top) {
+          if (const int code = send(first ? levers_[0].target : pending.hsi, first ? levers_[1].target : pending.top);
+              code != 0)
+            return code;
+        }
         next_send = now + kResendInterval;
       }
-      const auto wake = std::min(deadline, (confirmable || ready) ? next_send : deadline);
+      const auto wake = std::min(deadline, next_send > now ? next_send : deadline);
       const auto wait_ms = std::chrono::ceil<std::chrono::milliseconds>(wake - Clock::now()).count();
       pollfd fd{can_.fd(), POLLIN, 0};
       if (::poll(&fd, 1, static_cast<int>(std::clamp<long long>(wait_ms, 0, 1000))) < 0 && errno != EINTR)
@@ -129,26 +123,55 @@ class Session {
   }
 
  private:
+  static protocol::CommandMessage command(Verb verb, const Options& o) {
+    protocol::CommandMessage m;
+    m.opcode = lever::ctl::opcode(verb);
+    if (verb == Verb::set_deadband) {
+      m.direction = o.direction;
+      m.mode = o.mode;
+      m.p = static_cast<std::uint16_t>(std::lround(o.p / protocol::kPLsb));
+      m.floor = static_cast<std::uint16_t>(std::lround(o.floor / protocol::kFloorLsb));
+      m.filter_hz = static_cast<std::uint16_t>(std::lround(o.filter_hz / protocol::kFilterHzLsb));
+    }
+    return m;
+  }
+
+  // A command confirmed by the settings frame goes out once every target has sent one: its counters from before
+  // the command are what a newer one is judged against.
+  bool ready() const {
+    if (!lever::ctl::confirmed_by_settings(verb_)) return true;
+    for (const auto& lever : levers_)
+      if (lever.target && !lever.settings) return false;
+    return true;
+  }
+
   Judgement judge(const Lever& lever, Clock::time_point now) const {
     const auto heartbeat = lever.fresh(now);
     Judgement j = lever::ctl::judge(verb_, heartbeat);
     if (!heartbeat) j.why = lever.silent_for(now);
+    if (!lever::ctl::confirmed_by_settings(verb_) || j.outcome != Outcome::done) return j;
+    if (!lever.settings)
+      return {Outcome::pending, fmt::format("{}; no settings frame heard (a lever sends one every {} ms)",
+                                            lever::ctl::describe(*heartbeat), protocol::kSettingsPeriodMs)};
+    if (!lever.settings_before) return {Outcome::pending, "not sent yet"};
+    j = lever::ctl::judge_settings(verb_, *lever.settings_before, *lever.settings, command_);
+    if (j.outcome != Outcome::done)
+      j.why = fmt::format("its settings frame says {}: {}", lever::ctl::describe(*lever.settings, lever.role), j.why);
     return j;
   }
 
-  std::string shown(const Judgement (&)[2]) const {
+  std::string shown() const {
     std::string out;
-    for (const auto& lever : levers_)
-      if (lever.target && lever.last)
-        out += fmt::format("{}{}: {}", out.empty() ? " (" : "; ", lever.name, lever::ctl::describe(*lever.last));
+    for (const auto& lever : levers_) {
+      if (!lever.target || !lever.last) continue;
+      out += fmt::format("{}{}: {}", out.empty() ? " (" : "; ", lever.name, lever::ctl::describe(*lever.last));
+      if (lever::ctl::confirmed_by_settings(verb_) && lever.settings)
+        out += fmt::format("; {}", lever::ctl::describe(*lever.settings, lever.role));
+    }
     return out.empty() ? out : out + ")";
   }
 
-  std::string target_names() const {
-    return levers_[0].target && levers_[1].target ? "HSI and TOP" : levers_[0].target ? "HSI" : "TOP";
-  }
-
-  int timed_out(const Judgement (&j)[2], double timeout_s, Clock::time_point) const {
+  int timed_out(const Judgement (&j)[2], double timeout_s) const {
     std::string why;
     for (int i = 0; i < 2; ++i)
       if (levers_[i].target && j[i].outcome != Outcome::done)
@@ -159,17 +182,9 @@ class Session {
   }
 
   int send(bool to_hsi, bool to_top) {
-    protocol::CommandMessage m;
-    m.opcode = lever::ctl::opcode(verb_);
+    protocol::CommandMessage m = command_;
     m.to_hsi = to_hsi;
     m.to_top = to_top;
-    if (verb_ == Verb::set_deadband) {
-      m.direction = options_.direction;
-      m.mode = options_.mode;
-      m.p = static_cast<std::uint16_t>(std::lround(options_.p / protocol::kPLsb));
-      m.floor = static_cast<std::uint16_t>(std::lround(options_.floor / protocol::kFloorLsb));
-      m.filter_hz = static_cast<std::uint16_t>(std::lround(options_.filter_hz / protocol::kFilterHzLsb));
-    }
     switch (can_.write(protocol::pack(m, static_cast<std::uint8_t>(options_.pair)))) {
       case lever::platform::IoStatus::ok:
         ++sent_;
@@ -208,21 +223,29 @@ class Session {
     }
   }
 
-  // A frame that does not decode is not a heartbeat of this pair's levers, whatever its id says.
+  // A frame that does not decode is not a heartbeat or settings frame of this pair's levers, whatever its id says.
   void take(const protocol::CanFrame& frame) {
-    protocol::HeartbeatMessage m;
     protocol::FrameAddress address;
-    if (protocol::decode(frame, m, address) != protocol::DecodeError::none || address.pair != options_.pair) return;
+    if (protocol::classify(frame.id, address) != protocol::DecodeError::none || address.pair != options_.pair) return;
     auto& lever = levers_[address.role == protocol::Role::hsi ? 0 : 1];
-    lever.last = m;
-    lever.heard = Clock::now();
+    if (address.kind == protocol::MessageKind::heartbeat) {
+      protocol::HeartbeatMessage m;
+      if (protocol::decode(frame, m, address) != protocol::DecodeError::none) return;
+      lever.last = m;
+      lever.heard = Clock::now();
+    } else if (address.kind == protocol::MessageKind::settings) {
+      protocol::SettingsMessage m;
+      if (protocol::decode(frame, m, address) != protocol::DecodeError::none) return;
+      lever.settings = m;
+    }
   }
 
   Verb verb_;
   Options options_;
   lever::platform::SocketCan can_;
-  Lever levers_[2] = {{"HSI", protocol::Role::hsi, false, std::nullopt, {}},
-                      {"TOP", protocol::Role::top, false, std::nullopt, {}}};
+  protocol::CommandMessage command_;
+  Lever levers_[2] = {{"HSI", protocol::Role::hsi, false, std::nullopt, {}, std::nullopt, std::nullopt},
+                      {"TOP", protocol::Role::top, false, std::nullopt, {}, std::nullopt, std::nullopt}};
   int sent_ = 0;
 };
 
@@ -245,14 +268,14 @@ int main(int argc, char** argv) {
       "resends it every 100 ms until each lever shows the commanded state (armed; disarmed; homed: position\n"
       "valid), or refuses it for a reason its heartbeat shows (a state or a latched fault the command cannot get\n"
       "past). Commands are idempotent on the levers, so a resend is harmless (docs/can-protocol.md). Tare and\n"
-      "set-deadband change nothing a heartbeat shows: they are sent three times, 100 ms apart, once their lever is\n"
-      "heard in a state that accepts them, and reported as not confirmed."};
+      "set-deadband are confirmed by the lever's settings frame instead: sent once the lever's settings frame is\n"
+      "heard, resent until a newer one shows the commanded values (set-deadband: mode, p, floor, filter; its\n"
+      "count of changes moved on) or a finished tare (its count of tares moved on)."};
   program::describe(app, "lever-ctl");
   app.footer(
-      "Exit status: 0 done (every lever of the pair shows the commanded state; tare and set-deadband: sent to a\n"
-      "lever that accepts them); 1 a lever refused or did not show the state within the timeout (which, and why\n"
-      "from its heartbeat), or the CAN interface failed; 2 bad input (an option, an interface that does not\n"
-      "exist).");
+      "Exit status: 0 done (every lever the command is for shows the commanded state, or settings, or a finished\n"
+      "tare); 1 a lever refused or did not show it within the timeout (which, and why from its heartbeat or\n"
+      "settings frame), or the CAN interface failed; 2 bad input (an option, an interface that does not exist).");
   Options o;
   const std::pair<const char*, Verb> verbs[] = {{"arm", Verb::arm},     {"disarm", Verb::disarm},
                                                 {"rearm", Verb::rearm}, {"home", Verb::home},
@@ -299,8 +322,10 @@ int main(int argc, char** argv) {
   lever::platform::SocketCanConfig config;
   config.interface = o.can;
   config.timestamps = false;
-  for (const auto role : {protocol::Role::hsi, protocol::Role::top})
+  for (const auto role : {protocol::Role::hsi, protocol::Role::top}) {
     config.filters.push_back({protocol::heartbeat_id(static_cast<std::uint8_t>(o.pair), role), 0x7FF});
+    config.filters.push_back({protocol::settings_id(static_cast<std::uint8_t>(o.pair), role), 0x7FF});
+  }
   auto can = lever::platform::SocketCan::open(config);
   if (!can) return fail(can.error().errno_value == ENODEV ? 2 : 1, can.error().message);
   return Session(verb, o, std::move(can).value()).run();

@@ -55,7 +55,44 @@ Targets still_pending(const Targets& t, const Judgement& hsi, const Judgement& t
   return {t.hsi && hsi.outcome == Outcome::pending, t.top && top.outcome == Outcome::pending};
 }
 
-bool confirmable(Verb verb) noexcept { return verb != Verb::tare && verb != Verb::set_deadband; }
+bool confirmed_by_settings(Verb verb) noexcept { return verb == Verb::tare || verb == Verb::set_deadband; }
+
+bool counter_newer(std::uint8_t before, std::uint8_t now) noexcept {
+  // Unsigned, so that a counter that wrapped (63 -> 0) is 1 ahead, not -63.
+  const unsigned ahead = (static_cast<unsigned>(now) - before) % protocol::kSettingsCountModulo;
+  return ahead >= 1 && ahead < protocol::kSettingsCountModulo / 2;
+}
+
+bool shows(const protocol::SettingsMessage& s, const protocol::CommandMessage& c) noexcept {
+  return s.mode == c.mode && s.p == c.p && s.floor == c.floor && s.filter_hz == c.filter_hz;
+}
+
+std::string describe(const protocol::SettingsMessage& s, protocol::Role role) {
+  const bool top = role == protocol::Role::top;
+  const std::string filter =
+      s.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", s.filter_hz * protocol::kFilterHzLsb);
+  return fmt::format("{}: {} p {:.4f}, floor {:.3f} {}, filter {}; changes {}, tares {}{}", top ? "force" : "motion",
+                     s.mode == codec::Mode::predictive ? "predictive" : "deadband", s.p * protocol::kPLsb,
+                     s.floor * protocol::kFloorLsb, top ? "N" : "rad/s", filter, s.changes, s.tares,
+                     s.taring ? ", taring" : "");
+}
+
+Judgement judge_settings(Verb verb, const protocol::SettingsMessage& before, const protocol::SettingsMessage& newest,
+                         const protocol::CommandMessage& command) {
+  if (verb == Verb::tare) {
+    const bool counted = counter_newer(before.tares, newest.tares);
+    if (counted && !newest.taring) return {Outcome::done, {}};
+    if (newest.taring || counted) return {Outcome::taken, fmt::format("taring (tares {})", newest.tares)};
+    return {Outcome::pending, fmt::format("the tare has not arrived: tares {} as before it, not taring", newest.tares)};
+  }
+  if (!counter_newer(before.changes, newest.changes))
+    return {Outcome::pending, fmt::format("the command has not arrived: changes {} as before it", newest.changes)};
+  if (!shows(newest, command))
+    return {Outcome::pending, fmt::format("changes {} (before it {}), but the values are not the commanded ones: "
+                                          "another host's command after it?",
+                                          newest.changes, before.changes)};
+  return {Outcome::done, {}};
+}
 
 std::string fault_names(protocol::FaultBits faults) {
   std::string names;
@@ -149,7 +186,7 @@ Judgement judge_home(const HeartbeatMessage& h) {
   return pending(h, "starting");
 }
 
-// Unconfirmable commands: "done" means the lever is up and in a state that accepts the command.
+// Confirmed by the settings frame (judge_settings): "done" here means the lever is up and accepts the tare now.
 Judgement judge_tare(const HeartbeatMessage& h) {
   if (h.state == LeverState::disarmed) return done();
   if (h.state == LeverState::init) return pending(h, "starting");

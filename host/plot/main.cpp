@@ -61,7 +61,8 @@ void print_log_summary(const plot::Session& s, const plot::CandumpLog& log, cons
     if (message == "LeverForce") fmt::print("  refresh {}, deadband {}", s.force_refresh, n - s.force_refresh);
     fmt::print("\n");
   }
-  fmt::print("  sent by the HSI {}, by the TOP {} (heartbeats, data and energy frames)\n", s.sent_by[0], s.sent_by[1]);
+  fmt::print("  sent by the HSI {}, by the TOP {} (heartbeats, data, energy and settings frames)\n", s.sent_by[0],
+             s.sent_by[1]);
   for (const bool top : {false, true}) {
     const plot::StatusLine* last = nullptr;
     std::size_t count = 0, placed = 0;
@@ -82,6 +83,7 @@ void print_log_summary(const plot::Session& s, const plot::CandumpLog& log, cons
           role, last->t, last->state, last->data_sent, last->refresh_sent, last->data_in_log, last->refresh_in_log);
   }
   for (const auto& f : s.faults_seen) fmt::print("  faults: {}\n", f);
+  for (const auto& f : s.settings_seen) fmt::print("  settings: {}\n", f);
   if (log.bad_lines)
     fmt::print(stderr, "lever-plot: {}: {} of {} lines skipped, not candump -L frames (the first: {})\n", name,
                log.bad_lines, log.lines, log.first_bad.front());

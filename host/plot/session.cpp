@@ -34,6 +34,8 @@ std::string message_name(const proto::FrameAddress& a) {
       return "LeverForce";
     case proto::MessageKind::energy:
       return top ? "LeverEnergyTop" : "LeverEnergyHsi";
+    case proto::MessageKind::settings:
+      return top ? "LeverSettingsTop" : "LeverSettingsHsi";
     case proto::MessageKind::heartbeat:
       return top ? "LeverHeartbeatTop" : "LeverHeartbeatHsi";
   }
@@ -47,12 +49,21 @@ std::string faults_text(std::uint16_t bits) {
   return s;
 }
 
+// "force: predictive p 0.1000 floor 0.050 N filter 30.0 Hz (changes 2, tares 1)": a lever's settings frame, read.
+std::string settings_text(const proto::SettingsMessage& m, bool top) {
+  std::string filter = m.filter_hz == 0 ? "off" : fmt::format("{:.1f} Hz", m.filter_hz * proto::kFilterHzLsb);
+  return fmt::format("{}: {} p {:.4f} floor {:.3f} {} filter {} (changes {}, tares {}{})", top ? "force" : "motion",
+                     m.mode == codec::Mode::predictive ? "predictive" : "deadband", m.p * proto::kPLsb,
+                     m.floor * proto::kFloorLsb, top ? "N" : "rad/s", filter, m.changes, m.tares,
+                     m.taring ? ", taring" : "");
+}
+
 std::string num(double v) { return std::isnan(v) ? "" : fmt::format("{:.6g}", v); }
 std::string num(int v) { return v < 0 ? "" : fmt::format("{}", v); }
 
 const char* kFramesHeader =
     "t,iface,message,pair,role,position_rad,velocity_rad_s,force_n,energy_j,tick,seq,refresh,restart,predictive,"
-    "state,position_valid,faults,seq_gaps,rejected_frames,counter,opcode\n";
+    "state,position_valid,faults,seq_gaps,rejected_frames,counter,opcode,p,floor,filter_hz,changes,tares,taring\n";
 
 // The timeline and the rate bins, filled as the frames go by: each row holds the state after every frame
 // before its time.
@@ -129,6 +140,7 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
   Builder b(s);
   std::array<std::uint16_t, 2> faults{};
   std::array<bool, 2> heard{};
+  std::array<std::string, 2> settings;  // as last shown, per lever
   // Each lever's frames in order: the n-th is where its status line with tx_frames = n was (at the latest) printed.
   std::array<std::vector<double>, 2> sent_at;
   // ... and how many data and refresh frames it had sent by then.
@@ -160,9 +172,9 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
         ++r.motion;
         if (m.flags.refresh) ++r.motion_refresh, ++s.motion_refresh, ++data_count[0].second;
         ++data_count[0].first;
-        row +=
-            fmt::format("hsi,{:.6g},{:.6g},,,{},{},{:d},{:d},{:d},,,,,,,\n", position, m.velocity * proto::kVelocityLsb,
-                        m.tick, m.seq, m.flags.refresh, m.flags.restart, m.flags.mode == codec::Mode::predictive);
+        row += fmt::format("hsi,{:.6g},{:.6g},,,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", position,
+                           m.velocity * proto::kVelocityLsb, m.tick, m.seq, m.flags.refresh, m.flags.restart,
+                           m.flags.mode == codec::Mode::predictive);
         break;
       }
       case proto::MessageKind::force: {
@@ -180,7 +192,7 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
         ++r.force;
         if (m.flags.refresh) ++r.force_refresh, ++s.force_refresh, ++data_count[1].second;
         ++data_count[1].first;
-        row += fmt::format("top,,,{:.6g},,{},{},{:d},{:d},{:d},,,,,,,\n", force, m.tick, m.seq, m.flags.refresh,
+        row += fmt::format("top,,,{:.6g},,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", force, m.tick, m.seq, m.flags.refresh,
                            m.flags.restart, m.flags.mode == codec::Mode::predictive);
         break;
       }
@@ -189,8 +201,8 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
         e = proto::decode(lf.frame, m, a);
         if (e != proto::DecodeError::none) break;
         sender = a.role == proto::Role::top ? 1 : 0;
-        row +=
-            fmt::format("{},,,,{:.6f},{},,,,,,,,,,,\n", sender ? "top" : "hsi", m.energy * proto::kEnergyLsbJ, m.tick);
+        row += fmt::format("{},,,,{:.6f},{},,,,,,,,,,,,,,,,,\n", sender ? "top" : "hsi", m.energy * proto::kEnergyLsbJ,
+                           m.tick);
         break;
       }
       case proto::MessageKind::heartbeat: {
@@ -207,15 +219,31 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
           faults[sender] = m.faults;
           heard[sender] = true;
         }
-        row += fmt::format("{},,,,,,,,,,{},{:d},{},{},{},{},\n", sender ? "top" : "hsi", static_cast<int>(m.state),
-                           m.position_valid, faults_text(m.faults), m.seq_gaps, m.rejected_frames, m.counter);
+        row +=
+            fmt::format("{},,,,,,,,,,{},{:d},{},{},{},{},,,,,,,\n", sender ? "top" : "hsi", static_cast<int>(m.state),
+                        m.position_valid, faults_text(m.faults), m.seq_gaps, m.rejected_frames, m.counter);
+        break;
+      }
+      case proto::MessageKind::settings: {
+        proto::SettingsMessage m;
+        e = proto::decode(lf.frame, m, a);
+        if (e != proto::DecodeError::none) break;
+        sender = a.role == proto::Role::top ? 1 : 0;
+        const std::string shown = settings_text(m, sender == 1);
+        if (shown != settings[sender]) {
+          s.settings_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI", shown));
+          settings[sender] = shown;
+        }
+        row += fmt::format("{},,,,,,,,,{:d},,,,,,,,{:.4f},{:.3f},{:.1f},{},{},{:d}\n", sender ? "top" : "hsi",
+                           m.mode == codec::Mode::predictive, m.p * proto::kPLsb, m.floor * proto::kFloorLsb,
+                           m.filter_hz * proto::kFilterHzLsb, m.changes, m.tares, m.taring);
         break;
       }
       case proto::MessageKind::command: {
         proto::CommandMessage m;
         e = proto::decode(lf.frame, m, a);
         if (e != proto::DecodeError::none) break;
-        row += fmt::format("host,,,,,,,,,,,,,,,,{}\n", static_cast<int>(m.opcode));
+        row += fmt::format("host,,,,,,,,,,,,,,,,{},,,,,,\n", static_cast<int>(m.opcode));
         break;
       }
     }

@@ -55,9 +55,10 @@ struct Session {
   std::size_t motion_refresh = 0, force_refresh = 0;
   std::size_t other_frames = 0;          // frames of other pairs, or of ids the protocol does not define
   std::size_t decode_errors = 0;         // frames of the protocol's ids that do not decode (length, reserved values)
-  std::array<std::size_t, 2> sent_by{};  // frames sent by the HSI, the TOP (heartbeats, data, energy)
+  std::array<std::size_t, 2> sent_by{};  // frames sent by the HSI, the TOP (heartbeats, data, energy, settings)
   std::vector<StatusLine> status;
-  std::vector<std::string> faults_seen;  // "TIME ROLE fault,fault" when a lever's latched faults change
+  std::vector<std::string> faults_seen;    // "TIME ROLE fault,fault" when a lever's latched faults change
+  std::vector<std::string> settings_seen;  // "TIME ROLE motion: deadband p ..." when a lever's settings frame changes
 };
 
 // The frames of `pair`; the status lines (may be empty) are placed on the log's time axis by their tx_frames

@@ -79,6 +79,14 @@ void PairMonitor::on_frame(const protocol::CanFrame& frame, std::int64_t t_us) n
       ++p.levers[index(address.role)].energy_frames;
       break;
     }
+    case protocol::MessageKind::settings: {
+      protocol::SettingsMessage m;
+      if (rejected(protocol::decode(frame, m, address))) return;
+      Lever& lever = p.levers[index(address.role)];
+      lever.settings = m;
+      ++lever.settings_frames;
+      break;
+    }
     case protocol::MessageKind::heartbeat: {
       protocol::HeartbeatMessage m;
       if (rejected(protocol::decode(frame, m, address))) return;
@@ -169,6 +177,7 @@ void PairMonitor::reset() noexcept {
       lever.heartbeats = 0;
       lever.counter.reset();
       lever.energy_frames = 0;
+      lever.settings_frames = 0;
     }
     for (Direction* d : {&p.motion, &p.force}) *d = Direction{};
     p.commands = 0;
@@ -203,6 +212,8 @@ Snapshot PairMonitor::snapshot(std::int64_t now_us) {
       out.heartbeats_lost = lever.counter.lost();
       out.heartbeats_out_of_order = lever.counter.out_of_order();
       out.energy_frames = lever.energy_frames;
+      out.settings = lever.settings;
+      out.settings_frames = lever.settings_frames;
       out.status = lever.status;
       out.status_age_s = age_s(lever.status.has_value(), lever.status_us, now_us);
     }

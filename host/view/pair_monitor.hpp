@@ -54,6 +54,9 @@ struct LeverView {
   std::uint64_t heartbeats_lost = 0;
   std::uint64_t heartbeats_out_of_order = 0;
   std::uint64_t energy_frames = 0;
+  // The newest settings frame: the codec settings of the direction this lever sends (HSI motion, TOP force).
+  std::optional<protocol::SettingsMessage> settings;
+  std::uint64_t settings_frames = 0;
   std::optional<LeverStatus> status;  // the newest status line of this lever, if any was given
   std::optional<double> status_age_s;
   bool silent() const noexcept { return !heartbeat_age_s || *heartbeat_age_s * 1e6 > kSilentAfterUs; }
@@ -130,6 +133,8 @@ class PairMonitor {
     std::uint64_t heartbeats = 0;
     SequenceCounter counter;
     std::uint64_t energy_frames = 0;
+    std::optional<protocol::SettingsMessage> settings;
+    std::uint64_t settings_frames = 0;
     std::optional<LeverStatus> status;
     std::int64_t status_us = 0;
   };

@@ -78,13 +78,27 @@ void lever_row(std::vector<Line>& out, const PairView& pair, Role role) {
                  lever_tone(lever)});
 }
 
-void direction_row(std::vector<Line>& out, const char* name, const DirectionView& d) {
+// What the direction's sender says it runs, from its settings frame: "deadband p 10.00 % floor 0.020 rad/s
+// filter off".
+std::string settings_text(const LeverView& sender, const char* unit) {
+  if (!sender.settings) return "settings not heard";
+  const auto& m = *sender.settings;
+  const std::string filter =
+      m.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", m.filter_hz * protocol::kFilterHzLsb);
+  return fmt::format("{} p {:.2f} % floor {:.3f} {} filter {}{}",
+                     m.mode == codec::Mode::predictive ? "predictive" : "deadband", 100.0 * m.p * protocol::kPLsb,
+                     m.floor * protocol::kFloorLsb, unit, filter, m.taring ? "  taring" : "");
+}
+
+void direction_row(std::vector<Line>& out, const char* name, const DirectionView& d, const LeverView& sender,
+                   const char* unit) {
   const Tone tone = d.lost + d.out_of_order > 0 ? Tone::warning : Tone::normal;
   out.push_back({fmt::format("  {:<14} {:>5.0f}/s {:>6.1f} % of 1 kHz  saves {:>5.1f} %   lost {:<6} late {:<6} "
                              "refresh {:<7} frames {}",
                              name, d.per_second, 100.0 * d.share(), 100.0 * d.savings(), d.lost, d.out_of_order,
                              d.refreshes, d.frames),
                  tone});
+  out.push_back({fmt::format("  {:<14} {}", "", settings_text(sender, unit)), Tone::normal});
 }
 
 struct SampleRange {
@@ -189,8 +203,8 @@ std::vector<Line> render(const Snapshot& s, const ReaderState& reader, const Scr
                    Tone::heading});
     lever_row(out, pair, Role::hsi);
     lever_row(out, pair, Role::top);
-    direction_row(out, "motion HSI>TOP", pair.motion);
-    direction_row(out, "force  TOP>HSI", pair.force);
+    direction_row(out, "motion HSI>TOP", pair.motion, pair.levers[0], "rad/s");
+    direction_row(out, "force  TOP>HSI", pair.force, pair.levers[1], "N");
     history_row(out, "HSI position", "rad", pair.hsi_position_history, options);
     history_row(out, "TOP force", "N", pair.top_force_history, options);
     const bool top_status = pair.levers[1].status.has_value();

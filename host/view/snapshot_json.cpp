@@ -31,6 +31,19 @@ json lever(const LeverView& l) {
            {"peer_seq_gaps", l.heard ? json(l.heartbeat.seq_gaps) : json()},
            {"rejected_frames", l.heard ? json(l.heartbeat.rejected_frames) : json()},
            {"energy_frames", l.energy_frames}};
+  out["settings_frames"] = l.settings_frames;
+  if (l.settings) {
+    const auto& m = *l.settings;
+    out["settings"] = {{"mode", m.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+                       {"p", m.p * protocol::kPLsb},
+                       {"floor", m.floor * protocol::kFloorLsb},
+                       {"filter_hz", m.filter_hz * protocol::kFilterHzLsb},
+                       {"changes", m.changes},
+                       {"tares", m.tares},
+                       {"taring", m.taring}};
+  } else {
+    out["settings"] = json();
+  }
   if (l.status) {
     out["status"] = {{"state", l.status->state},
                      {"faults", l.status->faults},

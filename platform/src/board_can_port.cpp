@@ -16,7 +16,8 @@ namespace {}  // namespace
 
 std::array<CanFilter, 5> lever_pair_filters(std::uint8_t pair) noexcept {
   // The flags in the mask must match the id's (zero): an extended or remote frame with the same 11 low bits
-  // is someone else's.
+  // is someone else's. The peer's settings frames stay out: they are for hosts, and a lever follows its peer's
+  // settings by the mode on every data frame.
   constexpr std::uint32_t mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
   using protocol::Role;
   return {{{protocol::command_id(pair), mask},

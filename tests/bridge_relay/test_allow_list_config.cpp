@@ -6,6 +6,7 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "bridge_stats.hpp"
+#include "lever/protocol/messages.hpp"
 
 using namespace lever::bridge;
 
@@ -28,10 +29,17 @@ TEST_CASE("allow-lists parse ids and ranges, and say what is wrong", "[bridge][a
 
 TEST_CASE("the default allow-list is the lever protocol's ids and nothing else", "[bridge][allow]") {
   const auto a = AllowList::lever_protocol();
-  CHECK(a.describe() == "0x080-0x08F,0x100-0x13F,0x700-0x71F");
+  CHECK(a.describe() == "0x080-0x08F,0x100-0x15F,0x700-0x71F");
   CHECK_FALSE(a.allows(0x000));
   CHECK(a.allows(0x123));  // an energy frame (pair 1, TOP)
-  CHECK_FALSE(a.allows(0x140));
+  CHECK(a.allows(0x15F));  // a settings frame (pair 15, TOP)
+  CHECK_FALSE(a.allows(0x160));
+  // Every id the message set defines, and none it does not.
+  for (std::uint32_t id = 0; id <= lever::protocol::kMaxStandardId; ++id) {
+    lever::protocol::FrameAddress address;
+    INFO(id);
+    CHECK(a.allows(id) == (lever::protocol::classify(id, address) == lever::protocol::DecodeError::none));
+  }
 }
 
 namespace {

@@ -57,6 +57,23 @@ printf '(1.000000) vcan0 700#0100000000000000\n' >"$work/good.log"
 run "$dbc" "$work/good.log"
 check "a good frame decodes: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
 check "a good frame decodes: the HSI's heartbeat" grep -q "LeverHeartbeatHsi State=1" "$work/out"
+# The settings frames bit for bit (docs/can-protocol.md's table), by payloads written out here by hand: every field
+# a different value, then every field at its widest; a field one bit off, wide or narrow, changes a value.
+# TOP: mode 1, changes 42, tares 21, taring, p 0x1234, floor 0xABCD, filter 0x8001.
+# HSI: mode 0, changes 63, tares 63, not taring, p 0xFFFF, floor 0, filter 0xFFFF.
+printf '(1.000000) vcan0 141#A9553412CDAB0180\n(1.000000) vcan0 140#FC3FFFFF0000FFFF\n' >"$work/settings.log"
+timeout 10 "$decode" --json "$dbc" "$work/settings.log" >"$work/out" 2>"$work/err"; code=$?
+check "settings frames decode: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+settings_is() {  # settings_is LINE MESSAGE JQ_CONDITION
+  check "settings frame $1: $2 where $3 (got $(sed -n "$1p" "$work/out"))" \
+    jq -e --arg m "$2" "select(.message == \$m) | .signals | $3" <(sed -n "$1p" "$work/out") >/dev/null
+}
+settings_is 1 LeverSettingsTop '.Mode == 1 and .Changes == 42 and .Tares == 21 and .Taring == 1'
+settings_is 1 LeverSettingsTop '(.P - 0.466 | fabs) < 1e-9 and (.Floor - 43.981 | fabs) < 1e-9 and (.FilterHz - 3276.9 | fabs) < 1e-9'
+settings_is 2 LeverSettingsHsi '.Mode == 0 and .Changes == 63 and .Tares == 63 and .Taring == 0'
+settings_is 2 LeverSettingsHsi '(.P - 6.5535 | fabs) < 1e-9 and .Floor == 0 and (.FilterHz - 6553.5 | fabs) < 1e-9'
+check "settings frames: seven signals each, no more" \
+  test "$(jq -c '.signals | keys' "$work/out" | sort -u)" = '["Changes","FilterHz","Floor","Mode","P","Tares","Taring"]'
 expect 2 "a log that is a directory" "a directory, not a candump -L log" "$dbc" "$work/adir"
 expect 2 "a log that is a device" "a device, not a candump -L log" "$dbc" /dev/zero
 expect 2 "a missing log" "cannot read: No such file" "$dbc" "$work/none.log"

@@ -46,6 +46,25 @@ check "the TOP's positions from its status lines" test "$(awk -F, 'NR > 1 && $3 
 check "the faults the run ended with" grep -q "faults: .* TOP force_stale" "$work/summary"
 check "plots.gp redraws from another directory" bash -c "cd / && gnuplot '$work/session/plots.gp'"
 
+# Settings frames (docs/can-protocol.md): counted as dbc-decode counts them, each change listed once, the values in
+# frames.csv. The TOP: predictive, changes 42, tares 21, taring, p 0.466, floor 43.981 N, filter 3276.9 Hz; then
+# the same frame again (no new line); the HSI's defaults (p 0.1, floor 0.02 rad/s).
+t0=$(head -1 "$log" | sed -E 's/^\(([0-9.]+)\).*/\1/')
+{ head -50 "$log"
+  echo "($t0) vcan0 141#A9553412CDAB0180"; echo "($t0) vcan0 141#A9553412CDAB0180"
+  echo "($t0) vcan0 140#0000E80314000000"; tail -n +51 "$log"; } >"$work/settings.log"
+run "$work/settings.log" --out "$work/settings" --no-plots
+check "a log with settings frames: exit 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0
+check "the settings frames counted" bash -c "grep -qE '^  LeverSettingsTop +2 ' '$work/out' && grep -qE '^  LeverSettingsHsi +1 ' '$work/out'"
+check "each lever's settings listed once per change ($(grep -c 'settings:' "$work/out"))" test "$(grep -c '  settings: ' "$work/out")" -eq 2
+check "the TOP's settings as sent" \
+  grep -q "settings: .* TOP force: predictive p 0.4660 floor 43.981 N filter 3276.9 Hz (changes 42, tares 21, taring)" "$work/out"
+check "the HSI's settings as sent" grep -q "settings: .* HSI motion: deadband p 0.1000 floor 0.020 rad/s filter off (changes 0, tares 0)" "$work/out"
+check "frames.csv: every row has the header's columns" \
+  test "$(awk -F, '{ print NF }' "$work/settings/frames.csv" | sort -u)" = 27
+check "frames.csv: a settings row by named columns" \
+  grep -qE '^[0-9.]+,vcan0,LeverSettingsTop,0,top,,,,,,,,,1,,,,,,,,0.4660,43.981,3276.9,42,21,1$' "$work/settings/frames.csv"
+
 # A log with some bad lines: counted in one line, the frames still drawn.
 { head -100 "$log"; echo "garbage"; head -c 3000 /dev/urandom | tr -d '\0'; echo; tail -n +101 "$log"; } >"$work/partly.log"
 run "$work/partly.log" --out "$work/partly" --no-plots

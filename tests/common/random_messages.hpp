@@ -21,4 +21,17 @@ inline protocol::HeartbeatMessage random_heartbeat(Rng& rng) {
   return h;
 }
 
+// The counters within their 6 bits, as they come off the wire.
+inline protocol::SettingsMessage random_settings(Rng& rng) {
+  protocol::SettingsMessage s;
+  s.mode = (rng.next() & 1) ? codec::Mode::predictive : codec::Mode::deadband;
+  s.changes = static_cast<std::uint8_t>(rng.next() % protocol::kSettingsCountModulo);
+  s.tares = static_cast<std::uint8_t>(rng.next() % protocol::kSettingsCountModulo);
+  s.taring = (rng.next() & 1) != 0;
+  s.p = static_cast<std::uint16_t>(rng.next());
+  s.floor = static_cast<std::uint16_t>(rng.next());
+  s.filter_hz = static_cast<std::uint16_t>(rng.next());
+  return s;
+}
+
 }  // namespace lever::test

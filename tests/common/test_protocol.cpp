@@ -17,7 +17,10 @@ TEST_CASE("ids carry the pair, and lower ids win arbitration for commands and da
   CHECK(command_id(15) < motion_id(0));
   CHECK(force_id(15) < energy_id(0, Role::hsi));
   CHECK(energy_id(15, Role::top) == 0x13F);
-  CHECK(energy_id(15, Role::top) < heartbeat_id(0, Role::hsi));
+  CHECK(energy_id(15, Role::top) < settings_id(0, Role::hsi));
+  CHECK(settings_id(0, Role::hsi) == 0x140);
+  CHECK(settings_id(15, Role::top) == 0x15F);
+  CHECK(settings_id(15, Role::top) < heartbeat_id(0, Role::hsi));
   CHECK(heartbeat_id(15, Role::top) <= kMaxStandardId);
 
   FrameAddress a;
@@ -29,7 +32,11 @@ TEST_CASE("ids carry the pair, and lower ids win arbitration for commands and da
   CHECK(a.kind == MessageKind::energy);
   CHECK(a.pair == 1);
   CHECK(a.role == Role::top);
-  CHECK(classify(0x140, a) == DecodeError::unknown_id);
+  REQUIRE(classify(0x145, a) == DecodeError::none);
+  CHECK(a.kind == MessageKind::settings);
+  CHECK(a.pair == 2);
+  CHECK(a.role == Role::top);
+  CHECK(classify(0x160, a) == DecodeError::unknown_id);
   CHECK(classify(0x720, a) == DecodeError::unknown_id);
   CHECK(classify(0x7FF, a) == DecodeError::unknown_id);
 }
@@ -76,6 +83,13 @@ TEST_CASE("every message survives pack and decode for random contents", "[protoc
            hback.last_data_seq == h.last_data_seq && hback.seq_gaps == h.seq_gaps &&
            hback.rejected_frames == h.rejected_frames && hback.counter == h.counter &&
            hback.encoder_errors == h.encoder_errors));
+
+    const SettingsMessage st = lever::test::random_settings(rng);
+    SettingsMessage stback;
+    REQUIRE(decode(pack(st, pair, role), stback, a) == DecodeError::none);
+    CHECK(a.role == role);
+    CHECK(a.kind == MessageKind::settings);
+    CHECK(stback == st);
 
     CommandMessage c;
     c.opcode = static_cast<Opcode>(1 + rng.next() % 6);
@@ -150,6 +164,23 @@ TEST_CASE("malformed frames are error codes", "[protocol]") {
   bad_mode.data[1] = static_cast<std::uint8_t>(bad_mode.data[1] | (3u << 3));
   CHECK(decode(bad_mode, c, a) == DecodeError::out_of_range);
 
+  SettingsMessage st;
+  CanFrame settings_good = pack(SettingsMessage{}, 3, Role::top);
+  REQUIRE(decode(settings_good, st, a) == DecodeError::none);
+  for (const int mode : {2, 3}) {
+    CanFrame bad_settings_mode = settings_good;
+    bad_settings_mode.data[0] = static_cast<std::uint8_t>(mode);
+    CHECK(decode(bad_settings_mode, st, a) == DecodeError::out_of_range);
+  }
+  CanFrame settings_reserved = settings_good;
+  settings_reserved.data[1] = 0x80;  // bit 15
+  CHECK(decode(settings_reserved, st, a) == DecodeError::out_of_range);
+  CanFrame settings_short = settings_good;
+  settings_short.dlc = 6;
+  CHECK(decode(settings_short, st, a) == DecodeError::wrong_dlc);
+  CHECK(decode(pack(HeartbeatMessage{}, 3, Role::top), st, a) == DecodeError::unknown_id);
+  CHECK(decode(settings_good, h, a) == DecodeError::unknown_id);
+
   ForceMessage f;
   CanFrame reserved_byte = pack(ForceMessage{}, 0);
   reserved_byte.data[7] = 1;
@@ -162,14 +193,18 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
   // Decoding must return a defined code, and a frame that decodes must re-pack to the very same bytes:
   // nothing in a payload may be silently dropped or invented.
   lever::Rng rng(99);
-  const std::uint32_t bases[] = {kCommandBase, kMotionBase, kForceBase, kHeartbeatBase, kEnergyBase};
-  int decoded[5] = {0, 0, 0, 0, 0}, rejected[5] = {0, 0, 0, 0, 0};
-  for (int i = 0; i < 50000; ++i) {
-    const std::size_t kind = rng.next() % 5;
+  const std::uint32_t bases[] = {kCommandBase, kMotionBase, kForceBase};
+  constexpr std::size_t kKinds = 6;
+  int decoded[kKinds] = {}, rejected[kKinds] = {};
+  for (int i = 0; i < 60000; ++i) {
+    const std::size_t kind = rng.next() % kKinds;
     const auto pair = static_cast<std::uint8_t>(rng.next() % kPairCount);
     const Role role = (rng.next() & 1) ? Role::top : Role::hsi;
     CanFrame f;
-    f.id = kind == 3 ? heartbeat_id(pair, role) : kind == 4 ? energy_id(pair, role) : bases[kind] + pair;
+    f.id = kind == 3   ? heartbeat_id(pair, role)
+           : kind == 4 ? energy_id(pair, role)
+           : kind == 5 ? settings_id(pair, role)
+                       : bases[kind] + pair;
     f.dlc = static_cast<std::uint8_t>(rng.next() % 8 == 0 ? rng.next() % 16 : 8);  // mostly the right length
     for (auto& b : f.data) b = static_cast<std::uint8_t>(rng.next());
     // Sparse payloads too: random bytes almost always set some reserved bit.
@@ -203,6 +238,12 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
         if (e == DecodeError::none) again = pack(m, pair, role);
         break;
       }
+      case 5: {
+        SettingsMessage m;
+        e = decode(f, m, a);
+        if (e == DecodeError::none) again = pack(m, pair, role);
+        break;
+      }
       default: {
         HeartbeatMessage h;
         e = decode(f, h, a);
@@ -217,16 +258,34 @@ TEST_CASE("every possible payload decodes to a value or an error, never anything
       INFO("kind " << kind << " id " << f.id);
       CHECK(again.id == f.id);
       CHECK(again.dlc == f.dlc);
-      // Command frames leave bits 13-15 as reserved zero and have no other padding; the rest use every bit.
+      // Command frames leave bits 13-15 as reserved zero, settings frames bit 15; no other padding.
       CHECK(std::equal(f.data.begin(), f.data.end(), again.data.begin()));
     } else {
       ++rejected[kind];
     }
   }
   // Every kind was exercised on both paths, decoded and refused, hundreds of times each.
-  for (int k = 0; k < 5; ++k) {
+  for (std::size_t k = 0; k < kKinds; ++k) {
     INFO("kind " << k);
     CHECK(decoded[k] > 200);
     CHECK(rejected[k] > 200);
+  }
+}
+
+TEST_CASE("a parameter becomes the nearest code of its field, clipped", "[protocol]") {
+  CHECK(unsigned_code(0.1, kPLsb) == 1000);
+  CHECK(unsigned_code(0.12345, kPLsb) == 1235);  // a configuration's extra digits round to the field's
+  CHECK(unsigned_code(0.02, kFloorLsb) == 20);
+  CHECK(unsigned_code(30.0, kFilterHzLsb) == 300);
+  CHECK(unsigned_code(0.0, kPLsb) == 0);
+  CHECK(unsigned_code(0.00004, kPLsb) == 0);
+  CHECK(unsigned_code(0.00005, kPLsb) == 1);
+  CHECK(unsigned_code(100.0, kFloorLsb) == 65535);  // past the field: its largest code
+  CHECK(unsigned_code(-1.0, kFloorLsb) == 0);
+  // Every code of the command comes back as itself through the lever's double.
+  for (std::uint32_t code = 0; code <= 65535; ++code) {
+    REQUIRE(unsigned_code(code * kPLsb, kPLsb) == code);
+    REQUIRE(unsigned_code(code * kFloorLsb, kFloorLsb) == code);
+    REQUIRE(unsigned_code(code * kFilterHzLsb, kFilterHzLsb) == code);
   }
 }

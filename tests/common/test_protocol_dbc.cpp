@@ -88,7 +88,7 @@ void check_frame(const DbcMessage& dbc, const CanFrame& frame, const Expected& e
 
 TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]") {
   const auto dbc = parse_dbc(LEVER_DBC_PATH);
-  REQUIRE(dbc.size() == 7);
+  REQUIRE(dbc.size() == 9);
   lever::Rng rng(5);
   auto flag = [&rng] { return (rng.next() & 1) != 0; };
   for (int i = 0; i < 500; ++i) {
@@ -140,6 +140,17 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
                              {"EncoderErrors", h.encoder_errors}};
     check_frame(dbc.at("LeverHeartbeatHsi"), pack(h, 0, Role::hsi), heartbeat);
     check_frame(dbc.at("LeverHeartbeatTop"), pack(h, 0, Role::top), heartbeat);
+
+    const SettingsMessage st = lever::test::random_settings(rng);
+    const Expected settings{{"Mode", static_cast<double>(st.mode)},
+                            {"Changes", st.changes},
+                            {"Tares", st.tares},
+                            {"Taring", st.taring},
+                            {"P", st.p * kPLsb},
+                            {"Floor", st.floor * kFloorLsb},
+                            {"FilterHz", st.filter_hz * kFilterHzLsb}};
+    check_frame(dbc.at("LeverSettingsHsi"), pack(st, 0, Role::hsi), settings);
+    check_frame(dbc.at("LeverSettingsTop"), pack(st, 0, Role::top), settings);
 
     CommandMessage c;
     c.opcode = static_cast<Opcode>(1 + rng.next() % 6);

@@ -80,20 +80,126 @@ TEST_CASE("lever-ctl disarm: done when disarmed, whatever stays latched", "[ctl]
   CHECK(outcome(Verb::disarm, heartbeat(LeverState::fault, true, 1)) == Outcome::pending);
 }
 
-TEST_CASE("lever-ctl tare goes to a disarmed TOP only, set-deadband to its direction's sender, neither confirmable",
-          "[ctl]") {
-  CHECK_FALSE(ctl::confirmable(Verb::tare));
-  CHECK_FALSE(ctl::confirmable(Verb::set_deadband));
-  CHECK(ctl::confirmable(Verb::arm));
+TEST_CASE(
+    "lever-ctl tare goes to a disarmed TOP only, set-deadband to its direction's sender, both confirmed by "
+    "the settings frame",
+    "[ctl]") {
+  CHECK(ctl::confirmed_by_settings(Verb::tare));
+  CHECK(ctl::confirmed_by_settings(Verb::set_deadband));
+  for (const Verb verb : {Verb::arm, Verb::disarm, Verb::rearm, Verb::home})
+    CHECK_FALSE(ctl::confirmed_by_settings(verb));
   const auto tare = ctl::targets(Verb::tare);
   CHECK((!tare.hsi && tare.top));
   const auto motion = ctl::targets(Verb::set_deadband, protocol::Direction::motion);
   CHECK((motion.hsi && !motion.top));
   const auto force = ctl::targets(Verb::set_deadband, protocol::Direction::force);
   CHECK((!force.hsi && force.top));
+  // What the heartbeat says: whether the lever accepts the command now (the settings frame says the rest).
   CHECK(outcome(Verb::tare, heartbeat(LeverState::disarmed, true)) == Outcome::done);
   CHECK(outcome(Verb::tare, heartbeat(LeverState::armed, true)) == Outcome::refused);
   CHECK(outcome(Verb::set_deadband, heartbeat(LeverState::armed, true)) == Outcome::done);
+}
+
+namespace {
+
+protocol::SettingsMessage settings(std::uint8_t changes, std::uint8_t tares = 0, bool taring = false) {
+  protocol::SettingsMessage m;
+  m.mode = codec::Mode::deadband;
+  m.p = 1000;
+  m.floor = 50;
+  m.filter_hz = 0;
+  m.changes = changes;
+  m.tares = tares;
+  m.taring = taring;
+  return m;
+}
+
+protocol::CommandMessage set_deadband(codec::Mode mode, std::uint16_t p, std::uint16_t floor, std::uint16_t filter) {
+  protocol::CommandMessage c;
+  c.opcode = protocol::Opcode::set_deadband;
+  c.direction = protocol::Direction::force;
+  c.mode = mode;
+  c.p = p;
+  c.floor = floor;
+  c.filter_hz = filter;
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("lever-ctl: a settings counter is newer when it moved on by 1 to 31, across the wrap", "[ctl]") {
+  CHECK(ctl::counter_newer(3, 4));
+  CHECK(ctl::counter_newer(3, 34));
+  CHECK_FALSE(ctl::counter_newer(3, 3));
+  CHECK_FALSE(ctl::counter_newer(3, 35));  // 32 ahead: as far behind, so not newer
+  CHECK_FALSE(ctl::counter_newer(3, 2));
+  CHECK(ctl::counter_newer(63, 0));
+  CHECK(ctl::counter_newer(62, 1));
+  CHECK_FALSE(ctl::counter_newer(0, 63));
+}
+
+TEST_CASE("lever-ctl set-deadband: done only when a newer settings frame shows the commanded values", "[ctl]") {
+  const auto command = set_deadband(codec::Mode::predictive, 250, 70, 300);
+  auto taken = settings(6);
+  taken.mode = codec::Mode::predictive;
+  taken.p = 250;
+  taken.floor = 70;
+  taken.filter_hz = 300;
+  CHECK(ctl::shows(taken, command));
+  CHECK(ctl::judge_settings(Verb::set_deadband, settings(5), taken, command).outcome == Outcome::done);
+  // The values already there, but no newer count: the command may not have arrived (a frame from before it).
+  auto old = taken;
+  old.changes = 5;
+  const auto not_arrived = ctl::judge_settings(Verb::set_deadband, settings(5), old, command);
+  CHECK(not_arrived.outcome == Outcome::pending);
+  CHECK_THAT(not_arrived.why, Catch::Contains("has not arrived"));
+  // A newer count with other values: another command came after (or instead of) this one.
+  const auto other = ctl::judge_settings(Verb::set_deadband, settings(5), settings(7), command);
+  CHECK(other.outcome == Outcome::pending);
+  CHECK_THAT(other.why, Catch::Contains("not the commanded ones"));
+  // Each value counts: one off is not the commanded setting.
+  for (int field = 0; field < 4; ++field) {
+    auto off = taken;
+    if (field == 0) off.mode = codec::Mode::deadband;
+    if (field == 1) off.p = 251;
+    if (field == 2) off.floor = 71;
+    if (field == 3) off.filter_hz = 0;
+    INFO("field " << field);
+    CHECK_FALSE(ctl::shows(off, command));
+    CHECK(ctl::judge_settings(Verb::set_deadband, settings(5), off, command).outcome == Outcome::pending);
+  }
+  // Across the counter's wrap.
+  auto wrapped = taken;
+  wrapped.changes = 0;
+  CHECK(ctl::judge_settings(Verb::set_deadband, settings(63), wrapped, command).outcome == Outcome::done);
+}
+
+TEST_CASE("lever-ctl tare: taken while the gauge averages (no resend), done once a newer tare has ended", "[ctl]") {
+  protocol::CommandMessage tare;
+  tare.opcode = protocol::Opcode::tare;
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 2), settings(0, 2), tare).outcome == Outcome::pending);
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 2), settings(0, 2, true), tare).outcome == Outcome::taken);
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 2), settings(0, 3, true), tare).outcome == Outcome::taken);
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 2), settings(0, 3), tare).outcome == Outcome::done);
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 63), settings(0, 0), tare).outcome == Outcome::done);
+  // A settings change is no tare.
+  CHECK(ctl::judge_settings(Verb::tare, settings(0, 2), settings(1, 2), tare).outcome == Outcome::pending);
+  // Taken is not resent.
+  const ctl::Judgement taken{Outcome::taken, {}};
+  const auto resend = ctl::still_pending({false, true}, taken, taken);
+  CHECK((!resend.hsi && !resend.top));
+}
+
+TEST_CASE("lever-ctl describes a settings frame in the direction's units", "[ctl]") {
+  auto m = settings(3, 1, true);
+  m.filter_hz = 300;
+  CHECK(ctl::describe(m, protocol::Role::top) ==
+        "force: deadband p 0.1000, floor 0.050 N, filter 30.0 Hz; changes 3, tares 1, taring");
+  m.filter_hz = 0;
+  m.taring = false;
+  m.mode = codec::Mode::predictive;
+  CHECK(ctl::describe(m, protocol::Role::hsi) ==
+        "motion: predictive p 0.1000, floor 0.050 rad/s, filter off; changes 3, tares 1");
 }
 
 TEST_CASE("lever-ctl: a resend goes only to the targets still pending", "[ctl]") {

@@ -77,19 +77,47 @@ echo "  $(said)"
 check "arm to a TOP in fault: exit 1 (got $code), naming the TOP, its state and fault" \
   grep -q "arm pair 0: TOP refused: fault, position valid, faults comms_timeout: arm does not clear" "$work/ctl.err"
 
-# 4. Tare: to the TOP only, while disarmed, three copies; reported unconfirmed.
-echo "$disarmed" >"$work/top"
-watch_commands "$work/tare.log"
-sleep 0.1
+# 4. Tare: to the TOP only, once its settings frame is heard (docs/can-protocol.md: mode 0, changes 0, tares 0,
+# p 1000, floor 50, filter 0). After the first copy the TOP says it is averaging (no resend while it does), 0.3 s
+# later one more tare done: exit 0 on one command frame.
+top_settings=0000E80332000000 top_taring=0040E80332000000 top_tared=0001E80332000000
+echo "$disarmed" >"$work/top"; echo "$top_settings" >"$work/top_settings"
+lever 141 "$work/top_settings"
+watch_commands "$work/tare.log" 1 "$work/top_settings" "$top_taring"
+(
+  until [[ $(<"$work/top_settings") == "$top_taring" ]]; do sleep 0.02; done
+  sleep 0.3
+  echo "$top_tared" >"$work/top_settings"
+) &
+pids+=("$!")
 ctl tare --pair 0 --can vcan0; code=$?
 sleep 0.3
 echo "  $(said)"
-check "tare: exit 0 (got $code), three copies to the TOP alone (080#0402...), said to be unconfirmed" \
-  test "$code" -eq 0 -a "$(grep -c '^080#0402000000000000$' "$work/tare.log")" -eq 3 -a \
-  "$(wc -l <"$work/tare.log")" -eq 3
-check "(the report says so)" grep -q "not confirmed" "$work/ctl.out"
+check "tare: exit 0 (got $code), done, one copy to the TOP alone (080#0402...), none while it averaged" \
+  test "$code" -eq 0 -a "$(grep -c '^080#0402000000000000$' "$work/tare.log")" -eq 1 -a "$(wc -l <"$work/tare.log")" -eq 1
+check "(the report says done, with the TOP's tare count)" grep -q "tare pair 0 on vcan0: done in .*tares 1" "$work/ctl.out"
 
-# 5. Bad input: an interface that does not exist, a pair out of range: exit 2, one line.
+# 5. set-deadband of the force direction (predictive, p 0.025, floor 0.05): to the TOP alone; the TOP takes the
+# second copy (changes 1, the commanded values): exit 0 on two command frames.
+top_set=0501FA0032000000
+watch_commands "$work/deadband.log" 2 "$work/top_settings" "$top_set"
+ctl set-deadband --pair 0 --can vcan0 --direction force --mode predictive --p 0.025 --floor 0.05; code=$?
+sleep 0.3
+echo "  $(said)"; echo "  frames: $(tr '\n' ' ' <"$work/deadband.log")"
+check "set-deadband: exit 0 (got $code), done after two copies to the TOP alone (080#050EFA00...)" \
+  test "$code" -eq 0 -a "$(tr '\n' ' ' <"$work/deadband.log")" = "080#050EFA0032000000 080#050EFA0032000000 "
+check "(the report says done, with the TOP's settings)" \
+  grep -q "set-deadband pair 0 on vcan0: done in .*force: predictive p 0.0250, floor 0.050 N" "$work/ctl.out"
+# ... and a TOP that never takes it: exit 1 within the timeout, saying what its settings frame still shows.
+watch_commands "$work/ignored.log"
+ctl set-deadband --pair 0 --can vcan0 --direction force --p 0.1 --timeout 1; code=$?
+echo "  $(said)"
+check "set-deadband not taken: exit 1 (got $code), resent, naming the TOP and what it shows" \
+  test "$code" -eq 1 -a "$(wc -l <"$work/ignored.log")" -ge 5
+check "(the message)" grep -q "set-deadband pair 0: not done within 1 s .*TOP: its settings frame says force: predictive p 0.0250.*has not arrived" "$work/ctl.err"
+check "no command ends unconfirmed" bash -c "! grep -q 'not confirmed' '$work/ctl.out' '$work/ctl.err'"
+
+# 6. Bad input: an interface that does not exist, a pair out of range: exit 2, one line.
 ctl arm --pair 0 --can nosuch0; code=$?
 check "an interface that does not exist: exit 2 (got $code), one line: $(said)" \
   test "$code" -eq 2 -a "$(wc -l <"$work/ctl.err")" -eq 1

@@ -206,3 +206,28 @@ TEST_CASE("reset zeroes the counters and keeps what the levers said last", "[vie
   m.on_frame(motion(4, 42, 0), kT0 + 5);
   CHECK(m.snapshot(kT0 + 6).pairs[0].motion.lost == 0);
 }
+
+TEST_CASE("each lever's newest settings frame is kept with a count of them, bad ones rejected", "[view]") {
+  view::PairMonitor m;
+  protocol::SettingsMessage st;
+  st.p = 1000;
+  m.on_frame(protocol::pack(st, 0, Role::top), kT0);
+  st.p = 250;
+  st.changes = 1;
+  m.on_frame(protocol::pack(st, 0, Role::top), kT0 + 1);
+  auto bad = protocol::pack(st, 0, Role::hsi);
+  bad.data[0] = 3;  // mode 3: none such
+  m.on_frame(bad, kT0 + 2);
+  auto s = m.snapshot(kT0 + 3);
+  const auto& top = s.pairs[0].levers[1];
+  REQUIRE(top.settings);
+  CHECK(top.settings->p == 250);
+  CHECK(top.settings->changes == 1);
+  CHECK(top.settings_frames == 2);
+  CHECK_FALSE(s.pairs[0].levers[0].settings);
+  CHECK(s.bus.rejected == 1);
+  m.reset();
+  s = m.snapshot(kT0 + 4);
+  CHECK(s.pairs[0].levers[1].settings_frames == 0);
+  CHECK(s.pairs[0].levers[1].settings->p == 250);  // what the lever said last stays
+}

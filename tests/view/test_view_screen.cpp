@@ -146,3 +146,36 @@ TEST_CASE("the screen's own refresh rate over its last ten intervals", "[view]")
   CHECK(view::render(m.snapshot(kT0), {"vcan0", true, 0}, options)[0].text.rfind("lever-view  vcan0  [FROZEN]", 0) ==
         0);
 }
+
+TEST_CASE("the screen shows the settings each direction's sender reports, or that none was heard", "[view]") {
+  auto m = armed_pair_with_faulted_top();
+  std::string text = screen_of(m.snapshot(kT0 + 10'000));
+  CHECK(text.find("settings not heard") != std::string::npos);
+  protocol::SettingsMessage st;
+  st.mode = codec::Mode::predictive;
+  st.p = 250;
+  st.floor = 50;
+  st.filter_hz = 300;
+  st.taring = true;
+  m.on_frame(protocol::pack(st, 0, Role::top), kT0 + 1);
+  st.mode = codec::Mode::deadband;
+  st.p = 1000;
+  st.floor = 20;
+  st.filter_hz = 0;
+  st.taring = false;
+  m.on_frame(protocol::pack(st, 0, Role::hsi), kT0 + 2);
+  text = screen_of(m.snapshot(kT0 + 10'000));
+  CHECK(text.find("predictive p 2.50 % floor 0.050 N filter 30.0 Hz  taring") != std::string::npos);
+  CHECK(text.find("deadband p 10.00 % floor 0.020 rad/s filter off") != std::string::npos);
+  // Each below its own direction's row.
+  CHECK(text.find("motion HSI>TOP") < text.find("deadband p 10.00 %"));
+  CHECK(text.find("deadband p 10.00 %") < text.find("force  TOP>HSI"));
+  CHECK(text.find("force  TOP>HSI") < text.find("predictive p 2.50 %"));
+  const auto j = view::to_json(m.snapshot(kT0 + 10'000), {"vcan0", true, 0});
+  const auto& top = j["pairs"][0]["top"];
+  CHECK(top["settings"]["mode"] == "predictive");
+  CHECK(top["settings"]["p"].get<double>() == Approx(0.025));
+  CHECK(top["settings"]["filter_hz"].get<double>() == Approx(30.0));
+  CHECK(top["settings"]["taring"] == true);
+  CHECK(top["settings_frames"] == 1);
+}

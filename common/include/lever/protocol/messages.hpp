@@ -4,7 +4,7 @@
 // agree with the DBC bit for bit.
 //
 // Identifiers carry the lever pair (0..15) in their low bits so that several pairs share one bus; lower ids win
-// arbitration, so commands outrank data and data outranks heartbeats.
+// arbitration, so commands outrank data, data outranks settings and settings outrank heartbeats.
 #include <cstdint>
 #include <numbers>
 #include <string_view>
@@ -23,6 +23,7 @@ constexpr std::uint32_t kCommandBase = 0x080;    // 0x080 + pair
 constexpr std::uint32_t kMotionBase = 0x100;     // 0x100 + pair, HSI -> TOP
 constexpr std::uint32_t kForceBase = 0x110;      // 0x110 + pair, TOP -> HSI
 constexpr std::uint32_t kEnergyBase = 0x120;     // 0x120 + 2 * pair + role: a data sender's port energy
+constexpr std::uint32_t kSettingsBase = 0x140;   // 0x140 + 2 * pair + role: the settings of the direction it sends
 constexpr std::uint32_t kHeartbeatBase = 0x700;  // 0x700 + 2 * pair + role
 
 constexpr std::uint32_t command_id(std::uint8_t pair) noexcept { return kCommandBase + pair; }
@@ -30,6 +31,9 @@ constexpr std::uint32_t motion_id(std::uint8_t pair) noexcept { return kMotionBa
 constexpr std::uint32_t force_id(std::uint8_t pair) noexcept { return kForceBase + pair; }
 constexpr std::uint32_t energy_id(std::uint8_t pair, Role role) noexcept {
   return kEnergyBase + 2u * pair + static_cast<std::uint32_t>(role);
+}
+constexpr std::uint32_t settings_id(std::uint8_t pair, Role role) noexcept {
+  return kSettingsBase + 2u * pair + static_cast<std::uint32_t>(role);
 }
 constexpr std::uint32_t heartbeat_id(std::uint8_t pair, Role role) noexcept {
   return kHeartbeatBase + 2u * pair + static_cast<std::uint32_t>(role);
@@ -43,12 +47,13 @@ enum class DecodeError : std::uint8_t {
   out_of_range = 3,  // an enumeration or reserved field holds a value the protocol does not define
 };
 
-enum class MessageKind : std::uint8_t { command, motion, force, energy, heartbeat };
+enum class MessageKind : std::uint8_t { command, motion, force, energy, settings, heartbeat };
 
 struct FrameAddress {
   MessageKind kind{};
   std::uint8_t pair = 0;
-  Role role = Role::hsi;  // the sender's role (heartbeat, energy); HSI for motion, TOP for force; unused for command
+  Role role = Role::hsi;  // the sender's role (heartbeat, energy, settings); HSI for motion, TOP for force; unused
+                          // for command
 };
 
 // What an identifier means, or unknown_id.
@@ -62,6 +67,9 @@ constexpr DecodeError classify(std::uint32_t id, FrameAddress& out) noexcept {
   } else if (id >= kEnergyBase && id < kEnergyBase + 2u * kPairCount) {
     const auto offset = id - kEnergyBase;
     out = {MessageKind::energy, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
+  } else if (id >= kSettingsBase && id < kSettingsBase + 2u * kPairCount) {
+    const auto offset = id - kSettingsBase;
+    out = {MessageKind::settings, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
   } else if (id >= kHeartbeatBase && id < kHeartbeatBase + 2u * kPairCount) {
     const auto offset = id - kHeartbeatBase;
     out = {MessageKind::heartbeat, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
@@ -86,6 +94,11 @@ inline constexpr double kEnergyLsbJ = 1e-6;
 inline constexpr double kPLsb = 1e-4;        // p up to 6.5535
 inline constexpr double kFloorLsb = 1e-3;    // rad/s or N, up to 65.535
 inline constexpr double kFilterHzLsb = 0.1;  // up to 6553.5 Hz; 0 = off
+// A lever repeats its settings frame this often besides sending it on every change: a host that starts listening,
+// or lost the frame of a change, learns the settings within it, at 2 frames a second a lever (docs/can-protocol.md).
+inline constexpr std::uint32_t kSettingsPeriodMs = 500;
+// The settings frame's rolling counters: 6 bits each.
+inline constexpr std::uint8_t kSettingsCountModulo = 64;
 
 // Flags shared by both data frames.
 struct DataFlags {
@@ -123,6 +136,29 @@ struct EnergyMessage {
   std::uint16_t tick = 0;    // sender's 1 ms tick, modulo 2^16
   std::uint8_t epoch = 0;    // the sender's arming count modulo 256: a new epoch restarts the account
 };
+
+// Each lever -> host (and anyone listening), on every change and every kSettingsPeriodMs: the codec settings of
+// the direction the lever sends (HSI: motion, TOP: force), in the command's units, with counters a host compares
+// before and after a command to know the lever took it.
+struct SettingsMessage {
+  codec::Mode mode = codec::Mode::deadband;
+  std::uint8_t changes = 0;     // set_deadband commands accepted since boot, modulo kSettingsCountModulo
+  std::uint8_t tares = 0;       // tares completed since boot, modulo kSettingsCountModulo (0 without a gauge)
+  bool taring = false;          // a tare is averaging now
+  std::uint16_t p = 0;          // kPLsb
+  std::uint16_t floor = 0;      // kFloorLsb
+  std::uint16_t filter_hz = 0;  // kFilterHzLsb, 0 = off
+  friend constexpr bool operator==(const SettingsMessage&, const SettingsMessage&) noexcept = default;
+};
+
+// A non-negative parameter as the code of a 16-bit field of `lsb`: the nearest, clipped to the field (a
+// configuration may hold more digits, or more range, than the command carries).
+constexpr std::uint16_t unsigned_code(double value, double lsb) noexcept {
+  const double code = value / lsb + 0.5;
+  if (!(code >= 1.0)) return 0;  // NaN too
+  if (code >= 65535.0) return 65535;
+  return static_cast<std::uint16_t>(code);
+}
 
 // Stable numbers: on the wire in heartbeats.
 enum class LeverState : std::uint8_t { init = 0, disarmed = 1, armed = 2, fault = 3, homing = 4 };
@@ -228,6 +264,19 @@ constexpr CanFrame pack(const EnergyMessage& m, std::uint8_t pair, Role role) no
   return f;
 }
 
+// The counters wrap: only their low 6 bits go on the wire.
+constexpr CanFrame pack(const SettingsMessage& m, std::uint8_t pair, Role role) noexcept {
+  CanFrame f = detail::frame(settings_id(pair, role));
+  put_bits(f.data, 0, 2, static_cast<std::uint8_t>(m.mode));
+  put_bits(f.data, 2, 6, m.changes);
+  put_bits(f.data, 8, 6, m.tares);
+  put_bits(f.data, 14, 1, m.taring);
+  put_bits(f.data, 16, 16, m.p);
+  put_bits(f.data, 32, 16, m.floor);
+  put_bits(f.data, 48, 16, m.filter_hz);
+  return f;
+}
+
 constexpr CanFrame pack(const HeartbeatMessage& m, std::uint8_t pair, Role role) noexcept {
   CanFrame f = detail::frame(heartbeat_id(pair, role));
   put_bits(f.data, 0, 4, static_cast<std::uint8_t>(m.state));
@@ -293,6 +342,21 @@ constexpr DecodeError decode(const CanFrame& f, EnergyMessage& m, FrameAddress& 
   m.energy = static_cast<std::uint32_t>(get_bits(f.data, 0, 32));
   m.tick = static_cast<std::uint16_t>(get_bits(f.data, 32, 16));
   m.epoch = static_cast<std::uint8_t>(get_bits(f.data, 48, 8));
+  return DecodeError::none;
+}
+
+constexpr DecodeError decode(const CanFrame& f, SettingsMessage& m, FrameAddress& address) noexcept {
+  if (const auto e = detail::expect(f, MessageKind::settings, address); e != DecodeError::none) return e;
+  const auto mode = get_bits(f.data, 0, 2);
+  if (mode > static_cast<std::uint8_t>(codec::Mode::predictive)) return DecodeError::out_of_range;
+  if (get_bits(f.data, 15, 1) != 0) return DecodeError::out_of_range;  // reserved
+  m.mode = static_cast<codec::Mode>(mode);
+  m.changes = static_cast<std::uint8_t>(get_bits(f.data, 2, 6));
+  m.tares = static_cast<std::uint8_t>(get_bits(f.data, 8, 6));
+  m.taring = get_bits(f.data, 14, 1);
+  m.p = static_cast<std::uint16_t>(get_bits(f.data, 16, 16));
+  m.floor = static_cast<std::uint16_t>(get_bits(f.data, 32, 16));
+  m.filter_hz = static_cast<std::uint16_t>(get_bits(f.data, 48, 16));
   return DecodeError::none;
 }
 

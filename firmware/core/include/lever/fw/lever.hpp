@@ -5,7 +5,7 @@
 // everything it touches comes through the HAL (hal.hpp).
 //
 // Per tick: timing -> sensors -> frames from the bus -> faults -> control by state (homing, armed: the role,
-// fault: the safe behaviour) -> clamp torque -> command the motor -> data and heartbeat out.
+// fault: the safe behaviour) -> clamp torque -> command the motor -> data, settings and heartbeat out.
 #include <cstdint>
 #include <optional>
 
@@ -134,8 +134,9 @@ class Lever {
     apply_torque(control(now, dt_));
   }
 
-  // The heartbeat, and the step's time on the board.
+  // The settings and the heartbeat, and the step's time on the board.
   void end(Tick now) noexcept {
+    transmit_settings(now);
     if (now >= next_heartbeat_) {
       transmit_heartbeat();
       next_heartbeat_ = now + config_.heartbeat_period;
@@ -223,6 +224,8 @@ class Lever {
       protocol::CommandMessage m;
       error = protocol::decode(frame, m, address);
       if (error == protocol::DecodeError::none && Role::addressed(m)) on_command(m, now);
+    } else if (address.kind == protocol::MessageKind::settings) {
+      return;  // for hosts: this lever follows its peer's settings by the mode on every data frame
     } else {
       return;  // this lever's own kind of data frame, from another node: not for it
     }
@@ -288,7 +291,10 @@ class Lever {
         // Only the sending end of a direction owns its parameters; the receiving end follows the mode flag
         // carried by the data frames, which switches it at the same sample.
         accepted = codec::is_valid(c) && m.direction == Role::kSends;
-        if (accepted) role_.reconfigure(c);
+        if (accepted) {
+          role_.reconfigure(c);
+          ++settings_changes_;  // a copy with the same values counts too: the host sees its command arrive
+        }
         break;
       }
       case protocol::Opcode::home:
@@ -422,6 +428,25 @@ class Lever {
     }
   }
 
+  // On any change (a set_deadband taken, a tare started or done) in the step that made it, so the frame follows
+  // the first data frame coded under a new setting; and every kSettingsPeriodMs for a host that missed it.
+  void transmit_settings(Tick now) noexcept {
+    const auto& c = role_.sender().config();
+    protocol::SettingsMessage m;
+    m.mode = c.mode;
+    m.changes = static_cast<std::uint8_t>(settings_changes_ % protocol::kSettingsCountModulo);
+    m.tares = static_cast<std::uint8_t>(gauge_.state().tares % protocol::kSettingsCountModulo);
+    m.taring = gauge_.taring();
+    m.p = protocol::unsigned_code(c.p, protocol::kPLsb);
+    m.floor = protocol::unsigned_code(c.floor, protocol::kFloorLsb);
+    m.filter_hz = protocol::unsigned_code(c.filter_hz, protocol::kFilterHzLsb);
+    if (now < next_settings_ && m == last_settings_) return;
+    send(protocol::pack(m, config_.pair, Role::kRole));
+    ++counters_.settings_sent;
+    last_settings_ = m;
+    next_settings_ = now + protocol::kSettingsPeriodMs;
+  }
+
   void transmit_heartbeat() noexcept {
     const auto saturate = [](std::uint32_t v) { return static_cast<std::uint8_t>(v > 255 ? 255 : v); };
     protocol::HeartbeatMessage m;
@@ -468,6 +493,9 @@ class Lever {
   double dt_ = 0.0;                  // this step's interval for the controllers, bounded
   std::uint64_t started_ns_ = 0;     // when this step began, on the board's step clock
   Tick next_heartbeat_ = 0;
+  Tick next_settings_ = 0;
+  protocol::SettingsMessage last_settings_{};
+  std::uint32_t settings_changes_ = 0;  // set_deadband commands accepted
   Tick saturated_ticks_ = 0;
   double hold_position_ = 0.0;
   bool uses_gauge_;

@@ -29,6 +29,7 @@ class StrainGauge {
     double offset_counts = 0.0;
     std::uint16_t tare_left = 0;
     double tare_sum = 0.0;
+    std::uint32_t tares = 0;  // completed since boot: what a host confirms a tare by (the settings frame)
     // Readings the source marked failed (ForceReading::error: a Modbus timeout, CRC error, exception...),
     // counted once per failure by its tick. They never refresh the force: staleness tells when it is gone.
     std::uint32_t failed_readings = 0;
@@ -78,7 +79,10 @@ class StrainGauge {
  private:
   constexpr void accumulate_tare(double raw) noexcept {
     state_.tare_sum += raw;
-    if (--state_.tare_left == 0) state_.offset_counts = state_.tare_sum / config_.tare_samples;
+    if (--state_.tare_left == 0) {
+      state_.offset_counts = state_.tare_sum / config_.tare_samples;
+      ++state_.tares;
+    }
   }
 
   Config config_;

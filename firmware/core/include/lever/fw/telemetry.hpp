@@ -16,6 +16,7 @@ struct LeverCounters {
   std::uint32_t data_sent = 0;          // data frames sent, refreshes included
   std::uint32_t refresh_sent = 0;       // of which sent by the refresh period, a restart or a reconfiguration
   std::uint32_t energy_sent = 0;        // energy frames (passivity observe or tdpa)
+  std::uint32_t settings_sent = 0;      // settings frames, on change and periodic
   std::uint32_t commands_rejected = 0;  // commands refused by the supervisor or with invalid parameters
 };
 
