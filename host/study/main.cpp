@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,7 @@
 #include "lever/study/rating.hpp"
 #include "lever/study/session_log.hpp"
 #include "lever/study/three_ifc.hpp"
+#include "session_runner.hpp"
 
 namespace {
 
@@ -51,6 +54,16 @@ struct SessionOptions {
   double threshold = 0.12;
   double slope = 3.0;
   double lapse = 0.02;
+};
+
+struct RunOptions {
+  study::RunnerOptions runner;
+  std::string protocol = "3ifc";
+  std::optional<std::uint64_t> seed;
+  int pair = 0;
+  study::ThreeIfcConfig three_ifc;
+  study::RatingConfig rating;
+  std::optional<double> interval_s;
 };
 
 struct ReportOptions {
@@ -328,15 +341,48 @@ int report(const ReportOptions& o) {
 
 }  // namespace
 
+// A session on a pair. A new log takes its seed from --seed or, by default, from the system's random source, and
+// writes it in its header; an existing one is resumed under its own header, whatever the options say.
+int run(RunOptions o) {
+  auto& header = o.runner.header;
+  header.protocol = o.protocol;
+  header.simulated = false;
+  header.seed = o.seed ? *o.seed : (static_cast<std::uint64_t>(std::random_device{}()) << 32) ^ std::random_device{}();
+  if (o.interval_s) {
+    o.three_ifc.interval_s = *o.interval_s;
+    o.rating.interval_s = *o.interval_s;
+  }
+  header.config = o.protocol == "3ifc" ? study::to_json(o.three_ifc) : study::to_json(o.rating);
+  o.runner.pair = static_cast<std::uint8_t>(o.pair);
+  try {
+    if (std::filesystem::exists(o.runner.log)) {
+      const auto log = study::read_session_log(o.runner.log);
+      if (log.header.simulated)
+        return fail(2,
+                    fmt::format("{}: a simulated session, not one to run on a pair", program::printable(o.runner.log)));
+    } else if (header.subject.empty()) {
+      return fail(2, "a new session needs --subject (the subject's name or code, written in the log)");
+    }
+    return study::run_session(o.runner);
+  } catch (const study::SessionLogError& e) {
+    return fail(2, program::printable(e.what()));
+  } catch (const std::invalid_argument& e) {
+    return fail(2, program::printable(e.what()));
+  }
+}
+
 int main(int argc, char** argv) {
   CLI::App app{
-      "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3) off the bench: simulate runs the\n"
+      "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3): run presents a session on a pair\n"
+      "(the settings of every interval confirmed by the levers, every trial in a session log, resumable); simulate "
+      "runs the\n"
       "3IFC detection-threshold staircase for simulated observers of known threshold and reports the bias and\n"
       "spread of what it estimates; report summarises session logs (docs/study.md)."};
   program::describe(app, "lever-study");
   app.footer(
-      "Exit status: 0 done; 1 a runtime failure; 2 bad input (an option, a session log that is missing, damaged,\n"
-      "or does not match its own config and seed).");
+      "Exit status: 0 done; 1 a runtime failure (run: the bus or the pair; the log keeps every trial so far); 2 bad\n"
+      "input (an option, a session log that is missing, damaged, or does not match its own config and seed); 3 run:\n"
+      "the answers' input ended before the session; 130 run: stopped by SIGINT or SIGTERM.");
   const program::Choices<Format> formats{{"text", Format::text}, {"json", Format::json}, {"csv", Format::csv}};
 
   SimulateOptions s;
@@ -397,6 +443,47 @@ int main(int argc, char** argv) {
       ->check(program::number({0.0, 0.5, false, true, "a rate"}))
       ->default_str("0.02");
 
+  RunOptions ro;
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "a session on a pair: the intervals on the levers, the answers from this terminal or a program");
+  run_cmd->add_option("--can", ro.runner.can, "the pair's CAN interface")->required();
+  run_cmd->add_option("--pair", ro.pair, "the pair's number")->check(program::whole(0, 15))->default_str("0");
+  run_cmd->add_option("--log", ro.runner.log, "the session log: created, or resumed from its last complete trial")
+      ->required()
+      ->check(program::path());
+  run_cmd->add_option("--protocol", ro.protocol, "3ifc or rating (a new session)")
+      ->check(CLI::IsMember({"3ifc", "rating"}))
+      ->default_str("3ifc");
+  run_cmd->add_option("--subject", ro.runner.header.subject, "the subject's name or code (a new session)");
+  run_cmd->add_option("--seed", ro.seed, "the seed of the carriers or the order (a new session; default: random)")
+      ->check(program::seed());
+  run_cmd->add_option("--progress", ro.runner.progress,
+                      "the experimenter's view (p, carriers, answers), appended to this file, FIFO or terminal");
+  run_cmd->add_option("--interval-s", ro.interval_s, "an interval's length (paper: 20 s for 3ifc, 30 s for rating)")
+      ->check(program::number({0.1, 600.0, false, false, "a time in seconds"}));
+  run_cmd->add_option("--gap-s", ro.three_ifc.gap_s, "3ifc: the pause between a trial's intervals (our reading: 1)")
+      ->check(program::number({0.0, 60.0, false, false, "a time in seconds"}));
+  run_cmd->add_option("--start-p", ro.three_ifc.start_p, "3ifc: p of a pass's first trial (paper: 0.025)")
+      ->check(program::number(program::kWeberFraction));
+  run_cmd->add_option("--step", ro.three_ifc.step, "3ifc: the rise of p after a wrong answer (our reading: 0.025)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  run_cmd->add_option("--max-p", ro.three_ifc.max_p, "3ifc: the largest p (paper: 0.25)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  run_cmd
+      ->add_option("--right-in-a-row", ro.three_ifc.right_in_a_row,
+                   "3ifc: right answers in a row that end a pass (paper: 3)")
+      ->check(program::whole(1, 100));
+  run_cmd
+      ->add_option("--confirm-timeout", ro.runner.confirm_timeout_s,
+                   "seconds for a lever to show an interval's settings (then the trial is void)")
+      ->check(program::number({0.05, 60.0, false, false, "a time in seconds"}))
+      ->default_str("1");
+  run_cmd
+      ->add_option("--ready-timeout", ro.runner.ready_timeout_s,
+                   "seconds to wait for the pair to be armed, homed and free of faults before a trial")
+      ->check(program::number({1.0, 86400.0, false, false, "a time in seconds"}))
+      ->default_str("300");
+
   ReportOptions r;
   const program::Choices<Table> tables{{"thresholds", Table::thresholds}, {"ratings", Table::ratings}};
   CLI::App* rep =
@@ -411,6 +498,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
+  if (run_cmd->parsed()) return run(ro);
   if (sim->parsed()) return simulate(s);
   if (ses->parsed()) return simulated_session(so);
   return report(r);

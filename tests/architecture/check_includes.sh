@@ -21,7 +21,7 @@ rules=(
   "host/ctl|codec common math protocol platform program"
   "host/view|codec common math protocol platform program"
   "host/plot|codec common math protocol program"
-  "host/study|codec common math protocol program study"
+  "host/study|codec common math protocol platform program study"
   "hil/devices|codec common math protocol fw platform hil/devices"
   "hil/include|codec common math protocol fw hil"
   "hil/src|codec common math protocol fw hil"

@@ -14,6 +14,8 @@ declare -A skip=(
   ["lever-bridge --config bridge.toml --check-config                # validate the file and the key; open nothing"]="needs the reader's bridge.toml (tests/cli/lever_bridge_cli.sh checks --check-config on its own files)"
   ["lever-bridge --config bridge.toml                               # the same options from a file"]="needs a bridge.toml naming a CAN interface (tests/kernel)"
   ["lever-plot one-site.candump --status hsi.stats --status top.stats --out plots   # a session of pair 0"]="needs a recording (tests/cli/lever_plot_cli.sh runs it on lever_one_site's, tests/plot/)"
+  ["lever-study run --can can0 --pair 0 --protocol 3ifc --subject s01 --log s01-3ifc.jsonl --progress /dev/pts/3"]="needs a pair on can0 and a subject at this terminal (tests/kernel/lever_study.sh runs a whole session on the rig's pair)"
+  ["lever-study run --can can0 --protocol rating --subject s01 --log s01-rating.jsonl --progress progress.txt"]="needs a pair on can0 and a subject at this terminal (tests/kernel/lever_study.sh)"
   ["lever-fw --config top.toml --stats-json"]="runs the board's hardware (the e2e tests in tests/kernel run this command on gpio-sim, with a top.toml from the example)"
 )
 

@@ -88,4 +88,16 @@ expect_bad "report of a damaged log" "line 1 is not JSON" report "$work/bad.json
 printf '%s\n' '{"record":"session","format":1,"protocol":"3ifc","subject":"s","seed":1,"config":{"step":-1}}' \
   >"$work/badconfig.jsonl"
 expect_bad "report of a log with a bad config" "step must be" report "$work/badconfig.jsonl"
+# run: what is refused before any bus is opened, and a bus that is not there (exit 1, the log not created).
+expect_bad "run without --can" "--can is required" run --log "$work/run.jsonl" --subject s
+expect_bad "run: a new session without a subject" "needs --subject" run --can vcan0 --log "$work/run.jsonl"
+expect_bad "run: a simulated session's log" "a simulated session" run --can vcan0 --log "$work/whole.jsonl"
+expect_bad "run: a damaged log" "line 1 is not JSON" run --can vcan0 --log "$work/bad.jsonl"
+expect_bad "run --pair 16" "--pair" run --can vcan0 --pair 16 --log "$work/run.jsonl" --subject s
+"$study" run --can nosuchcan0 --log "$work/run.jsonl" --subject s >"$work/stdout" 2>"$work/stderr" </dev/null
+code=$?
+check "run on an interface that is not there: exit 1 (got $code)" test "$code" -eq 1
+check "run on an interface that is not there: says so ($(head -c 200 "$work/stderr"))" grep -q "nosuchcan0" "$work/stderr"
+check "run on an interface that is not there: no log written" test ! -e "$work/run.jsonl"
+check "--help lists run" grep -q "^  run " "$work/help"
 report "lever-study cli"

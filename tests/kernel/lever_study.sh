@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Runs inside the kernel rig in virtual time (run-in-guest --gpio-sim --pwm-sim --virtual-time): a whole short
+# 3IFC session run by lever-study run against the real lever-fw pair behind lever-hil serve (one site, the paper's
+# wall-tap operator), answered by a scripted subject, killed with SIGKILL in an interval and resumed from its log.
+# The subject answers as the prompts come: an Enter for the familiarization and the briefing, and for each trial the
+# interval the experimenter's view names (a test's oracle: the subject's own terminal never shows it), wrong on the
+# first trial; one wrong key first, which must be asked again. So the session runs: pass 1 wrong at 10 %, right at
+# 15 %; the briefing; pass 2 right at 10 % (killed in its second interval, then resumed); pass 3 right at 5 %
+# (half of pass 2's). Intervals of 2 s; one right answer ends a pass.
+# usage: lever_study.sh BIN_DIR
+set -uo pipefail
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/gpio_sim_lib.sh"
+. "$(dirname "$0")/lever_sites_lib.sh"
+trap stop_all EXIT
+
+one_site study --duration 0 --json
+up_and_homed
+command vcan0 1
+require "both arm" wait_for_serve study "both levers armed"
+
+log=$out/session.jsonl
+progress=$out/progress.txt
+: >"$progress"
+study_args=(run --can vcan0 --pair 0 --protocol 3ifc --subject rig --seed 7 --log "$log" --progress "$progress"
+  --interval-s 2 --gap-s 0.5 --start-p 0.10 --step 0.05 --max-p 0.25 --right-in-a-row 1)
+
+# in_interval_2_of PASS: the progress view says pass PASS's first trial is in its second interval
+in_interval_2_of() {
+  awk -v trial="3ifc pass $1 trial 1:" 'index($0, "attempt ") == 1 { current = index($0, trial) > 0 }
+    current && index($0, "interval 2 of 3: p") { found = 1 } END { exit !found }' "$progress"
+}
+# subject SESSION_OUT ANSWERS_FIFO [KILL_IN_PASS]: answers lever-study's prompts (its stdout, SESSION_OUT) into
+# the FIFO; with KILL_IN_PASS, kills lever-study with SIGKILL once that pass's first trial is in its second interval.
+answered=0
+subject() {
+  local session_out=$1 fifo=$2 kill_in=${3:-} seen=0 line carrier lines
+  exec 3>"$fifo"
+  while ((1)); do
+    if [[ -n $kill_in ]] && in_interval_2_of "$kill_in"; then
+      kill -KILL "$study_pid"
+      exec 3>&-
+      return 0
+    fi
+    mapfile -t lines <"$session_out"
+    while ((seen < ${#lines[@]})); do
+      line=${lines[seen]}
+      seen=$((seen + 1))
+      case $line in
+        *"Press Enter"*) echo >&3 ;;
+        "Which interval"*)
+          carrier=$(grep -o 'carried by interval [1-3]' "$progress" | tail -n 1 | grep -o '[1-3]$')
+          answered=$((answered + 1))
+          if ((answered == 1)); then
+            echo x >&3  # a wrong key, asked again
+            echo $((carrier % 3 + 1)) >&3
+          else
+            echo "$carrier" >&3
+          fi ;;
+      esac
+    done
+    kill -0 "$study_pid" 2>/dev/null || { exec 3>&-; return 0; }
+    sleep 0.1
+  done
+}
+
+# The session, killed in pass 2's trial's second interval.
+mkfifo "$work/answers1"
+"$bin/lever-study" "${study_args[@]}" <"$work/answers1" >"$out/subject1.txt" 2>"$out/study1.err" &
+study_pid=$!
+subject "$out/subject1.txt" "$work/answers1" 2
+wait "$study_pid"; code=$?
+check "lever-study killed with SIGKILL in an interval (exit $code)" test "$code" -eq 137
+check "a wrong key was asked again" grep -q "Please answer a number from 1 to 3" "$out/subject1.txt"
+check "the subject's prompts never show p or the carrier" bash -c "! grep -qiE '%|carri|p = |0\\.[0-9]' '$out/subject1.txt'"
+records_before=$(($(wc -l <"$log") - 1))
+check "the log holds the trials answered before the kill: familiarization, pass 1's two, the briefing ($records_before)" \
+  test "$records_before" -eq 4
+cp "$log" "$work/killed.jsonl"
+
+mkfifo "$work/answers2"
+"$bin/lever-study" "${study_args[@]}" <"$work/answers2" >"$out/subject2.txt" 2>"$out/study2.err" &
+study_pid=$!
+subject "$out/subject2.txt" "$work/answers2"
+wait "$study_pid"; code=$?
+check "lever-study resumed from its log and ended the session (exit $code)" test "$code" -eq 0
+cat "$progress"
+
+jqs() { jq -s -r "$1" "$log"; }
+check "no answer lost: the log as the kill left it is the resumed log's beginning, byte for byte" \
+  cmp -n "$(stat -c %s "$work/killed.jsonl")" "$work/killed.jsonl" "$log"
+check "the session: familiarization, pass 1 wrong then right, briefing, passes 2 and 3 right ($(jqs '[.[1:][] | "\(.kind) \(.pass) \(.right)"] | join(", ")'))" \
+  test "$(jqs '[.[1:][] | select(.void == null) | "\(.kind) \(.pass) \(.right)"] | join(", ")')" = \
+  "familiarization 0 null, 3ifc 1 false, 3ifc 1 true, briefing 0 null, 3ifc 2 true, 3ifc 3 true"
+check "the interrupted trial was repeated, and recorded once: pass 2 has one record" \
+  test "$(jqs '[.[1:][] | select(.kind == "3ifc" and .pass == 2)] | length')" -eq 1
+check "p per trial: 10, 15, 10, 5 % ($(jqs '[.[1:][] | select(.kind == "3ifc") | .p] | join(" ")'))" \
+  test "$(jqs '[.[1:][] | select(.kind == "3ifc") | .p * 1000 | round] | join(" ")')" = "100 150 100 50"
+check "every interval's settings confirmed by both levers, as the interval meant them" \
+  test "$(jqs '[.[1:][] | select(.void == null) | .intervals[] | (.confirmed.hsi.p - .interval.p_velocity | fabs) < 1e-4 and
+                (.confirmed.top.p - .interval.p_force | fabs) < 1e-4] | all')" = true
+check "every 3IFC interval lasted its 2 s on the bus's clock (within a heartbeat period, 25 ms)" \
+  test "$(jqs '[.[1:][] | select(.kind == "3ifc") | .intervals[] | (.end_bus_us - .start_bus_us - 2e6) | fabs < 25e3] | all')" = true
+# The deadband's interval on the bus: at 10 % and above, fewer data frames (both paths) than each plain interval.
+jqs '.[1:][] | select(.kind == "3ifc") | "p \(.p): carrier \(.carrier), frames (velocity+force) \([.intervals[] | "\(.frames_velocity)+\(.frames_force)"] | join(" "))"'
+check "each trial's deadband interval sent fewer data frames than either plain one (p >= 10 %)" \
+  test "$(jqs '[.[1:][] | select(.kind == "3ifc" and .p >= 0.1) | . as $t | [.intervals[] | .frames_velocity + .frames_force] as $n |
+                ($n[$t.carrier - 1]) < ([$n[range(3)] | select(. != $n[$t.carrier - 1])] | min)] | all')" = true
+check "lever-study report: the subject's threshold is the mean of the three passes, 10 %" \
+  bash -c "'$bin/lever-study' report '$log' | grep -E 'rig.*10(\\.0+)? ?%'"
+finish "a 3IFC session by lever-study on the pair"
