@@ -14,15 +14,18 @@ namespace lever::platform {
 
 namespace {}  // namespace
 
-std::array<CanFilter, 5> lever_pair_filters(std::uint8_t pair) noexcept {
+std::array<CanFilter, 7> lever_pair_filters(std::uint8_t pair) noexcept {
   // The flags in the mask must match the id's (zero): an extended or remote frame with the same 11 low bits
-  // is someone else's. The peer's settings frames stay out: they are for hosts, and a lever follows its peer's
-  // settings by the mode on every data frame.
+  // is someone else's. The energy frames pass: the passivity observer adds what its peer's port passed on (the
+  // lever's own does not come back: the socket does not receive its own frames). The peer's settings frames stay
+  // out: they are for hosts, and a lever follows its peer's settings by the mode on every data frame.
   constexpr std::uint32_t mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
   using protocol::Role;
   return {{{protocol::command_id(pair), mask},
            {protocol::motion_id(pair), mask},
            {protocol::force_id(pair), mask},
+           {protocol::energy_id(pair, Role::hsi), mask},
+           {protocol::energy_id(pair, Role::top), mask},
            {protocol::heartbeat_id(pair, Role::hsi), mask},
            {protocol::heartbeat_id(pair, Role::top), mask}}};
 }

@@ -36,19 +36,23 @@ bool contains(const std::vector<std::string>& problems, const std::string& start
 
 }  // namespace
 
-TEST_CASE("a pair's filters pass its five ids and no other classic frame", "[board_can]") {
+TEST_CASE("a pair's filters pass its seven ids and no other classic frame", "[board_can]") {
   for (std::uint8_t pair = 0; pair < lever::protocol::kPairCount; ++pair) {
     using lever::protocol::Role;
-    const std::set<std::uint32_t> own = {
-        lever::protocol::command_id(pair), lever::protocol::motion_id(pair), lever::protocol::force_id(pair),
-        lever::protocol::heartbeat_id(pair, Role::hsi), lever::protocol::heartbeat_id(pair, Role::top)};
+    const std::set<std::uint32_t> own = {lever::protocol::command_id(pair),
+                                         lever::protocol::motion_id(pair),
+                                         lever::protocol::force_id(pair),
+                                         lever::protocol::energy_id(pair, Role::hsi),
+                                         lever::protocol::energy_id(pair, Role::top),
+                                         lever::protocol::heartbeat_id(pair, Role::hsi),
+                                         lever::protocol::heartbeat_id(pair, Role::top)};
     std::size_t passed = 0;
     for (std::uint32_t id = 0; id <= CAN_SFF_MASK; ++id) {
       const bool pass = any_passes(pair, id);
       CHECK(pass == (own.count(id) == 1));
       passed += pass ? 1 : 0;
     }
-    CHECK(passed == 5);
+    CHECK(passed == 7);
   }
 }
 

@@ -18,7 +18,7 @@ namespace lever::platform {
 
 // The kernel filters of a lever pair: its command, motion and force frames and both roles' heartbeats, as
 // classic 11-bit data frames (extended and remote frames with the same low bits do not pass).
-std::array<CanFilter, 5> lever_pair_filters(std::uint8_t pair) noexcept;
+std::array<CanFilter, 7> lever_pair_filters(std::uint8_t pair) noexcept;
 
 struct BoardCanStats {
   std::uint64_t rx_frames = 0;        // data frames handed to the core
