@@ -34,7 +34,8 @@ in_interval_2_of() {
 # the FIFO; with KILL_IN_PASS, kills lever-study with SIGKILL once that pass's first trial is in its second interval.
 answered=0
 subject() {
-  local session_out=$1 fifo=$2 kill_in=${3:-} seen=0 line carrier lines
+  local session_out=$1 fifo=$2 kill_in=${3:-} seen=0 line carrier
+  local -a lines=()
   exec 3>"$fifo"
   while ((1)); do
     if [[ -n $kill_in ]] && in_interval_2_of "$kill_in"; then
@@ -66,6 +67,7 @@ subject() {
 
 # The session, killed in pass 2's trial's second interval.
 mkfifo "$work/answers1"
+: >"$out/subject1.txt"
 "$bin/lever-study" "${study_args[@]}" <"$work/answers1" >"$out/subject1.txt" 2>"$out/study1.err" &
 study_pid=$!
 subject "$out/subject1.txt" "$work/answers1" 2
@@ -79,6 +81,7 @@ check "the log holds the trials answered before the kill: familiarization, pass 
 cp "$log" "$work/killed.jsonl"
 
 mkfifo "$work/answers2"
+: >"$out/subject2.txt"
 "$bin/lever-study" "${study_args[@]}" <"$work/answers2" >"$out/subject2.txt" 2>"$out/study2.err" &
 study_pid=$!
 subject "$out/subject2.txt" "$work/answers2"
@@ -97,8 +100,8 @@ check "the interrupted trial was repeated, and recorded once: pass 2 has one rec
 check "p per trial: 10, 15, 10, 5 % ($(jqs '[.[1:][] | select(.kind == "3ifc") | .p] | join(" ")'))" \
   test "$(jqs '[.[1:][] | select(.kind == "3ifc") | .p * 1000 | round] | join(" ")')" = "100 150 100 50"
 check "every interval's settings confirmed by both levers, as the interval meant them" \
-  test "$(jqs '[.[1:][] | select(.void == null) | .intervals[] | (.confirmed.hsi.p - .interval.p_velocity | fabs) < 1e-4 and
-                (.confirmed.top.p - .interval.p_force | fabs) < 1e-4] | all')" = true
+  test "$(jqs '[.[1:][] | select(.void == null) | .intervals[] | (.confirmed.hsi.p - .p_velocity | fabs) < 1e-4 and
+                (.confirmed.top.p - .p_force | fabs) < 1e-4] | all')" = true
 check "every 3IFC interval lasted its 2 s on the bus's clock (within a heartbeat period, 25 ms)" \
   test "$(jqs '[.[1:][] | select(.kind == "3ifc") | .intervals[] | (.end_bus_us - .start_bus_us - 2e6) | fabs < 25e3] | all')" = true
 # The deadband's interval on the bus: at 10 % and above, fewer data frames (both paths) than each plain interval.
