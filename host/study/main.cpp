@@ -371,6 +371,18 @@ int run(RunOptions o) {
   }
 }
 
+// The 3IFC staircase's options, for simulate and run alike.
+void add_staircase_options(CLI::App& cmd, study::ThreeIfcConfig& c, const std::string& prefix) {
+  cmd.add_option("--start-p", c.start_p, prefix + "p of a pass's first trial (paper: 0.025)")
+      ->check(program::number(program::kWeberFraction));
+  cmd.add_option("--step", c.step, prefix + "the rise of p after a wrong answer (our reading: 0.025)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  cmd.add_option("--max-p", c.max_p, prefix + "the largest p (paper: 0.25)")
+      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
+  cmd.add_option("--right-in-a-row", c.right_in_a_row, prefix + "right answers in a row that end a pass (paper: 3)")
+      ->check(program::whole(1, 100));
+}
+
 int main(int argc, char** argv) {
   CLI::App app{
       "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3): run presents a session on a pair\n"
@@ -405,14 +417,7 @@ int main(int argc, char** argv) {
       ->check(program::seed())
       ->default_str("1");
   sim->add_option("--format", s.format, "text, json or csv")->transform(program::one_of(formats))->default_str("text");
-  sim->add_option("--start-p", s.config.start_p, "p of a pass's first trial (paper: 0.025)")
-      ->check(program::number(program::kWeberFraction));
-  sim->add_option("--step", s.config.step, "the rise of p after a wrong answer (our reading: 0.025)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  sim->add_option("--max-p", s.config.max_p, "the largest p (paper: 0.25)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  sim->add_option("--right-in-a-row", s.config.right_in_a_row, "right answers in a row that end a pass (paper: 3)")
-      ->check(program::whole(1, 100));
+  add_staircase_options(*sim, s.config, "");
   sim->add_option("--pass3-factor", s.config.pass3_factor, "pass 3 starts at this times pass 2's result (paper: 0.5)")
       ->check(program::number({0.0, 1.0, true, false, "a factor"}));
   sim->add_option("--max-trials-per-pass", s.config.max_trials_per_pass,
@@ -463,16 +468,7 @@ int main(int argc, char** argv) {
       ->check(program::number({0.1, 600.0, false, false, "a time in seconds"}));
   run_cmd->add_option("--gap-s", ro.three_ifc.gap_s, "3ifc: the pause between a trial's intervals (our reading: 1)")
       ->check(program::number({0.0, 60.0, false, false, "a time in seconds"}));
-  run_cmd->add_option("--start-p", ro.three_ifc.start_p, "3ifc: p of a pass's first trial (paper: 0.025)")
-      ->check(program::number(program::kWeberFraction));
-  run_cmd->add_option("--step", ro.three_ifc.step, "3ifc: the rise of p after a wrong answer (our reading: 0.025)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  run_cmd->add_option("--max-p", ro.three_ifc.max_p, "3ifc: the largest p (paper: 0.25)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  run_cmd
-      ->add_option("--right-in-a-row", ro.three_ifc.right_in_a_row,
-                   "3ifc: right answers in a row that end a pass (paper: 3)")
-      ->check(program::whole(1, 100));
+  add_staircase_options(*run_cmd, ro.three_ifc, "3ifc: ");
   run_cmd
       ->add_option("--confirm-timeout", ro.runner.confirm_timeout_s,
                    "seconds for a lever to show an interval's settings (then the trial is void)")

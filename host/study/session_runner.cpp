@@ -93,41 +93,32 @@ class SessionIo {
   }
 
   std::optional<Stop> send(const protocol::CommandMessage& m) {
-    switch (can_.write(protocol::pack(m, pair_))) {
-      case platform::IoStatus::ok:
-      case platform::IoStatus::would_block:  // the queue is full: the confirmation's wait resends
-        return std::nullopt;
-      case platform::IoStatus::interface_down:
-        return Stop{kSessionFailed, fmt::format("{} is down", can_.interface())};
-      case platform::IoStatus::interface_gone:
-        return Stop{kSessionFailed, fmt::format("{} is gone", can_.interface())};
-      default:
-        return Stop{kSessionFailed,
-                    fmt::format("sending on {}: {}", can_.interface(), std::strerror(can_.last_errno()))};
-    }
+    const auto status = can_.write(protocol::pack(m, pair_));
+    // would_block: the queue is full; the confirmation's wait sends another copy.
+    if (status == platform::IoStatus::ok || status == platform::IoStatus::would_block) return std::nullopt;
+    return failed("sending on", status);
   }
 
  private:
+  Stop failed(const char* doing, platform::IoStatus status) const {
+    if (status == platform::IoStatus::interface_down)
+      return Stop{kSessionFailed, fmt::format("{} is down", can_.interface())};
+    if (status == platform::IoStatus::interface_gone)
+      return Stop{kSessionFailed, fmt::format("{} is gone", can_.interface())};
+    return Stop{kSessionFailed, fmt::format("{} {}: {}", doing, can_.interface(), std::strerror(can_.last_errno()))};
+  }
+
   std::optional<Stop> drain() {
     protocol::CanFrame frame;
     std::int64_t t_us = 0;
     while (true) {
-      switch (can_.read(frame, t_us)) {
-        case platform::IoStatus::ok:
-          watch_.on_frame(frame, t_us);
-          continue;
-        case platform::IoStatus::would_block:
-          return std::nullopt;
-        case platform::IoStatus::skipped:
-        case platform::IoStatus::error_frame:
-          continue;
-        case platform::IoStatus::interface_down:
-          return Stop{kSessionFailed, fmt::format("{} is down", can_.interface())};
-        case platform::IoStatus::interface_gone:
-          return Stop{kSessionFailed, fmt::format("{} is gone", can_.interface())};
-        default:
-          return Stop{kSessionFailed,
-                      fmt::format("reading {}: {}", can_.interface(), std::strerror(can_.last_errno()))};
+      const auto status = can_.read(frame, t_us);
+      if (status == platform::IoStatus::ok) {
+        watch_.on_frame(frame, t_us);
+      } else if (status == platform::IoStatus::would_block) {
+        return std::nullopt;
+      } else if (status != platform::IoStatus::skipped && status != platform::IoStatus::error_frame) {
+        return failed("reading", status);
       }
     }
   }
@@ -282,28 +273,40 @@ class Runner {
     }
   }
 
-  // Asks each sending lever for the interval's settings and waits until its settings frame shows them; a lever
-  // that does not within the timeout leaves `why` set. A copy goes out every 200 ms (a lost command frame).
+  // Asks the path's sending lever for `wanted` and waits until its settings frame shows it took it (the counter
+  // moved on, the values asked for), sending a copy every 200 ms (a lost command frame). False when the lever has
+  // not within the confirmation timeout; a Stop for a signal or a bus that failed.
+  std::optional<Stop> confirm(Direction d, const protocol::SettingsMessage& wanted, bool& taken) {
+    const auto& seen = io_.watch().lever(sender_of(d));
+    const std::uint8_t before = seen.settings ? seen.settings->changes : 0;
+    const auto deadline = Clock::now() + seconds(options_.confirm_timeout_s);
+    auto next_copy = Clock::now();
+    taken = false;
+    while (!(seen.settings && confirms(*seen.settings, before, wanted))) {
+      if (Clock::now() >= deadline) return std::nullopt;
+      if (Clock::now() >= next_copy) {
+        if (auto stop = io_.send(command_for(d, wanted))) return stop;
+        next_copy = Clock::now() + std::chrono::milliseconds(200);
+      }
+      if (auto stop = io_.pump(std::chrono::milliseconds(20))) return stop;
+    }
+    taken = true;
+    return std::nullopt;
+  }
+
+  // The interval's settings on both levers, each confirmed; a lever that does not confirm leaves `why` set.
   std::optional<Stop> apply(const Interval& interval, nlohmann::json& confirmed, std::optional<std::string>& why) {
     for (const auto d : kDirections) {
       const Role role = sender_of(d);
       const auto wanted = settings_for(interval, d, baseline_[static_cast<std::size_t>(d)]);
+      bool taken = false;
+      if (auto stop = confirm(d, wanted, taken)) return stop;
       const auto& seen = io_.watch().lever(role);
-      const std::uint8_t before = seen.settings ? seen.settings->changes : 0;
-      const auto deadline = Clock::now() + seconds(options_.confirm_timeout_s);
-      auto next_copy = Clock::now();
-      while (!(seen.settings && confirms(*seen.settings, before, wanted))) {
-        if (Clock::now() >= deadline) {
-          why = fmt::format("the {} did not confirm {} within {} s (its settings frame: {})", role_name(role),
-                            describe(wanted), options_.confirm_timeout_s,
-                            seen.settings ? describe(*seen.settings) : std::string("none"));
-          return std::nullopt;
-        }
-        if (Clock::now() >= next_copy) {
-          if (auto stop = io_.send(command_for(d, wanted))) return stop;
-          next_copy = Clock::now() + std::chrono::milliseconds(200);
-        }
-        if (auto stop = io_.pump(std::chrono::milliseconds(20))) return stop;
+      if (!taken) {
+        why = fmt::format("the {} did not confirm {} within {} s (its settings frame: {})", role_name(role),
+                          describe(wanted), options_.confirm_timeout_s,
+                          seen.settings ? describe(*seen.settings) : std::string("none"));
+        return std::nullopt;
       }
       confirmed[role == Role::hsi ? "hsi" : "top"] = settings_json(*seen.settings, seen.settings_us);
       confirmed_[static_cast<std::size_t>(role)] = *seen.settings;
@@ -437,22 +440,13 @@ class Runner {
       stop_signal = 0;  // the restore's own reads; a second signal during it ends it
       for (const auto d : kDirections) {
         const auto& want = baseline_[static_cast<std::size_t>(d)];
-        const Role role = sender_of(d);
-        const auto& seen = io_.watch().lever(role);
+        const auto& seen = io_.watch().lever(sender_of(d));
         if (seen.settings && same_settings(*seen.settings, want)) continue;
-        const std::uint8_t before = seen.settings ? seen.settings->changes : 0;
-        const auto deadline = Clock::now() + seconds(options_.confirm_timeout_s);
-        auto next_copy = Clock::now();
-        while (!(seen.settings && confirms(*seen.settings, before, want)) && Clock::now() < deadline) {
-          if (Clock::now() >= next_copy) {
-            if (io_.send(command_for(d, want))) break;
-            next_copy = Clock::now() + std::chrono::milliseconds(200);
-          }
-          if (io_.pump(std::chrono::milliseconds(20))) break;
-        }
-        if (!(seen.settings && same_settings(*seen.settings, want)))
-          fmt::print(stderr, "lever-study: the {} did not take back its settings ({})\n", role_name(role),
-                     describe(want));
+        bool taken = false;
+        const auto failed = confirm(d, want, taken);
+        if (failed || !taken)
+          fmt::print(stderr, "lever-study: the {} did not take back its settings ({}){}\n", role_name(sender_of(d)),
+                     describe(want), failed ? ": " + failed->why : std::string());
       }
     }
     if (stop.code == kSessionDone) {

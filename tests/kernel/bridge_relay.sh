@@ -20,11 +20,11 @@ dump1=$!
 sleep 1
 
 # vcan0 -> vcan1: 1000 motion frames with counting payloads at 1 kHz, interleaved with ids the default
-# allow-list must stop (0x140: the first id past the lever protocol's energy frames); then vcan1 -> vcan0: 500
+# allow-list must stop (0x160: the first id past the lever protocol's settings frames); then vcan1 -> vcan0: 500
 # force frames.
 cangen vcan0 -I 101 -L 8 -D i -g 1 -n 1000 &
 gen=$!
-for id in 140 200 7FF 000 5A5; do cansend vcan0 "$id#DEADBEEF"; sleep 0.05; done
+for id in 160 200 7FF 000 5A5; do cansend vcan0 "$id#DEADBEEF"; sleep 0.05; done
 wait $gen
 cangen vcan1 -I 111 -L 8 -D i -g 1 -n 500
 sleep 1
@@ -43,7 +43,7 @@ check "1000 motion frames crossed vcan0 -> vcan1, in order, unchanged" same "$wo
 check "500 force frames crossed vcan1 -> vcan0, in order, unchanged" same "$work/111-on-1" "$work/111-on-0"
 check "all 1000 generated" test "$(grep -c '^101#' "$work/lever-on-0")" -eq 1000
 check "all 500 generated" test "$(grep -c '^111#' "$work/lever-on-1")" -eq 500
-check "disallowed ids did not cross" test -z "$(frames "$out/vcan1.log" | grep -E '^(140|200|7FF|000|5A5)#')"
+check "disallowed ids did not cross" test -z "$(frames "$out/vcan1.log" | grep -E '^(160|200|7FF|000|5A5)#')"
 check "bridge A counted the 5 disallowed frames" test "$(tail -1 "$out/a.stats" | jq .to_network.disallowed)" -eq 5
 check "no authentication failures, gaps or drops" \
   test "$(tail -1 "$out/b.stats" | jq '.from_network | .auth_failures + .sequence_gaps + .duplicates + .can_down_drops')" -eq 0
