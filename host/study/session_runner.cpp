@@ -38,7 +38,6 @@ void catch_stop_signals() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-const char* role_name(Role r) { return r == Role::hsi ? "HSI" : "TOP"; }
 constexpr Direction kDirections[] = {Direction::motion, Direction::force};
 
 struct Stop {
@@ -127,7 +126,6 @@ class SessionIo {
     char buffer[256];
     const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
     if (n > 0) {
-      // A line longer than any answer is cut: what follows its first 64 bytes is not an answer either.
       input_.append(buffer, static_cast<std::size_t>(n));
     } else if (n == 0 || (errno != EINTR && errno != EAGAIN)) {
       input_ended_ = true;

@@ -245,9 +245,8 @@ TEST_CASE("at 10 ms, after a contact tdpa leaves the TOP at rest within 10 mrad 
 
 // What the display's spread spending buys (PassivityConfig::display_spend_time_s): against the literature's
 // controller, which lets the held energy out at once and then cuts the whole force, the same runs at 50 ms.
-// Direction only: it was chosen after docs/firmware.md's table was measured. Not met since the levers' settings
-// frames ride on the buses (every 500 ms): seeds 1-5 summed 12.7 against 12.2 onsets/s (before: 11.4 against
-// 12.45), seeds 1-10 2.55 against 2.57 per run; the difference is within the seeds' spread (docs/firmware.md).
+// Direction only: it was chosen after docs/firmware.md's table was measured. Not met now: the difference is within
+// the seeds' spread (docs/firmware.md, "No longer measurable").
 TEST_CASE("at 50 ms the display's spread spending gives fewer contact onsets than spending at once",
           "[hil][passivity][!shouldfail]") {
   double spread = 0.0, at_once = 0.0;

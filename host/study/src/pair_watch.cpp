@@ -6,8 +6,9 @@
 
 namespace lever::study {
 
+const char* role_name(protocol::Role r) noexcept { return r == protocol::Role::hsi ? "HSI" : "TOP"; }
+
 namespace {
-const char* role_name(protocol::Role r) { return r == protocol::Role::hsi ? "HSI" : "TOP"; }
 std::string fault_list(protocol::FaultBits bits) {
   std::string out;
   for (const auto f : protocol::kAllFaults)

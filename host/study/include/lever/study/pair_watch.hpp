@@ -28,6 +28,9 @@ constexpr protocol::Role sender_of(protocol::Direction d) noexcept {
   return d == protocol::Direction::motion ? protocol::Role::hsi : protocol::Role::top;
 }
 
+// "HSI" or "TOP", as the runner's messages name a lever.
+const char* role_name(protocol::Role r) noexcept;
+
 class PairWatch {
  public:
   explicit PairWatch(std::uint8_t pair) noexcept : pair_(pair) {}
