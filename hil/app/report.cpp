@@ -170,6 +170,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
       {"contact_share", r.contact_share},
       {"mean_contact_force_n", r.mean_contact_force_n},
       {"contact_onsets_per_s", r.contact_onsets_per_s},
+      {"contact_rebounds", r.contact_rebounds},
+      {"contact_rebounds_of_rebounds", r.contact_rebounds_of_rebounds},
       {"passivity",
        {{"hsi",
          {{"dissipated_energy_j", r.hsi_dissipated_energy_j}, {"min_observed_energy_j", r.hsi_min_observed_energy_j}}},

@@ -72,6 +72,9 @@ void SimMetrics::finish(SimResult& result, const SimLevers& levers) const {
   const auto& hl = *levers.hsi().lever;
   const auto& tl = *levers.top().lever;
   metrics_.finish(result);
+  result.contact_onsets = metrics_.contact_onsets();
+  result.contact_rebounds = metrics_.contact_rebounds();
+  result.contact_rebounds_of_rebounds = metrics_.contact_rebounds_of_rebounds();
   result.nominal_delay_ticks = nominal_delay_ticks_;
   result.prefilter_delay_ms = prefilter_delay_ms_;
   result.hsi_lever_faults = lever_faults_[0];

@@ -30,10 +30,17 @@ class RunMetrics {
     // firmware's own contact threshold (ForceDisplay's 0.1 N, ten times the gauge's noise): a lever resting on
     // the wall grazes it at micronewtons from one physics substep to the next, which is no new contact.
     if (contact_n <= 0.0) {
+      if (touching_) last_end_tick_ = armed_ticks_;
       touching_ = false;
     } else if (!touching_ && contact_n > kContactOnsetN) {
       touching_ = true;
       ++contact_onsets_;
+      // A hand's tap on a stiff wall may bounce once; a bounce of a bounce is the loop's, not the hand's
+      // (docs/hil-model.md, "The contact check").
+      const bool rebound = contact_onsets_ > 1 && armed_ticks_ - last_end_tick_ <= kReboundTicks;
+      contact_rebounds_ += rebound;
+      contact_rebounds_of_rebounds_ += rebound && last_onset_was_rebound_;
+      last_onset_was_rebound_ = rebound;
     }
   }
 
@@ -74,8 +81,12 @@ class RunMetrics {
   std::uint64_t armed_ticks() const { return armed_ticks_; }
   std::uint64_t contact_ticks() const { return contact_ticks_; }
   std::uint64_t contact_onsets() const { return contact_onsets_; }
+  // Onsets within kReboundTicks of the last contact's end, and those of them whose last contact was one too.
+  std::uint64_t contact_rebounds() const { return contact_rebounds_; }
+  std::uint64_t contact_rebounds_of_rebounds() const { return contact_rebounds_of_rebounds_; }
 
   static constexpr double kContactOnsetN = 0.1;
+  static constexpr std::uint64_t kReboundTicks = 30;
   std::uint64_t motion_frames() const { return motion_frames_; }
   std::uint64_t force_frames() const { return force_frames_; }
 
@@ -90,8 +101,9 @@ class RunMetrics {
   std::uint64_t cause_ticks_ = 0, violations_link_ = 0, violations_codec_ = 0, violations_filter_ = 0;
   std::uint64_t armed_ticks_ = 0, motion_frames_ = 0, force_frames_ = 0, violations_ = 0, contact_ticks_ = 0;
   double sq_position_ = 0, sq_force_ = 0, contact_force_sum_ = 0;
-  std::uint64_t contact_onsets_ = 0;
-  bool touching_ = false;
+  std::uint64_t contact_onsets_ = 0, contact_rebounds_ = 0, contact_rebounds_of_rebounds_ = 0;
+  std::uint64_t last_end_tick_ = 0;
+  bool touching_ = false, last_onset_was_rebound_ = false;
 };
 
 }  // namespace lever::hil

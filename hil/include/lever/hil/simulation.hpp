@@ -137,6 +137,9 @@ struct SimResult {
   double contact_share = 0.0;         // share of armed ticks the TOP touched the wall
   double mean_contact_force_n = 0.0;  // while in contact
   double contact_onsets_per_s = 0.0;  // the TOP's wall contact beginning, per armed second (RunMetrics)
+  // Of those onsets, the ones within 30 ms of the last contact's end (a rebound), and the rebounds whose last
+  // contact was a rebound too (RunMetrics): the chatter the contact check bounds.
+  std::uint64_t contact_onsets = 0, contact_rebounds = 0, contact_rebounds_of_rebounds = 0;
   // Passivity (zero while off): what each lever's controller dissipated over the run (re-arms included), the lowest
   // observed energy seen while both were armed, and the energy frames both sent.
   double hsi_dissipated_energy_j = 0.0, top_dissipated_energy_j = 0.0;
