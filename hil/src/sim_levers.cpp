@@ -18,6 +18,7 @@ fw::LeverConfig firmware_for(const SimConfig& config, fw::LeverConfig fw) {
 fw::LeverConfig hsi_firmware(const SimConfig& config) {
   fw::LeverConfig fw = config.hsi_firmware;
   fw.motion_codec = config.velocity_codec;
+  fw.display.contact_damping_nms = config.hsi_contact_damping_nms.value_or(chain_contact_damping_nms(config));
   return firmware_for(config, fw);
 }
 
@@ -36,6 +37,12 @@ bool reads_paper_gauge(const SimConfig& config) {
 
 StrainGaugeParams effective_gauge(const SimConfig& config) {
   return reads_paper_gauge(config) ? paper_adc_gauge() : config.gauge;
+}
+
+double chain_contact_damping_nms(const SimConfig& config) {
+  // The lowest mean force_jnd_violation of the documented grid on each chain: the DAD's 18 Hz filter needs the
+  // damper, the unfiltered ADC does not (docs/hil-model.md, "Re-derived on each gauge chain").
+  return reads_paper_gauge(config) ? 0.05 : 0.4;
 }
 
 PowerUpAngles power_up_angles(const SimConfig& config) {

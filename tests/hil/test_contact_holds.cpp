@@ -64,3 +64,30 @@ TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-l
         }
   std::printf("contact check: %d of %d runs chatter\n", failing, setups);
 }
+
+// The method that sets the HSI's contact damping per gauge chain (docs/hil-model.md, "Re-derived on each gauge
+// chain"): its grid's figures, printed; hidden, a tool rather than a check (lever_tests_hil "[contact-damping]").
+TEST_CASE("the HSI's contact damping on each gauge chain, by the documented method", "[.][contact-damping]") {
+  for (const GaugeChain chain : {GaugeChain::dad141, GaugeChain::paper_adc})
+    for (const double damping : {0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.6, 2.0}) {
+      double sum = 0.0;
+      std::string seeds;
+      for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+        SimConfig c;
+        c.scenario = ScenarioKind::wall_tap;
+        c.seed = seed;
+        c.topology = Topology::two_sites;
+        c.gauge_chain = chain;
+        c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+        c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+        c.hsi_contact_damping_nms = damping;
+        const auto r = run_simulation(c);
+        sum += r.force_jnd_violation;
+        char b[16];
+        std::snprintf(b, sizeof b, "%s%.1f", seed == 1 ? "" : " / ", 100.0 * r.force_jnd_violation);
+        seeds += b;
+      }
+      std::printf("contact damping: %s, %.2f N m s/rad: %s %%, mean %.2f %%\n",
+                  chain == GaugeChain::dad141 ? "dad141" : "paper-adc", damping, seeds.c_str(), 100.0 * sum / 3.0);
+    }
+}

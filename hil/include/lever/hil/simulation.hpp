@@ -57,6 +57,9 @@ struct SimConfig;
 // The strain-gauge chain the run's levers read: the paper's ADC or the DAD 141.1 (config.gauge), by gauge_chain.
 bool reads_paper_gauge(const SimConfig& config);
 StrainGaugeParams effective_gauge(const SimConfig& config);
+// The HSI's contact damping (N m s/rad) for the run's gauge chain, by the method docs/hil-model.md documents
+// ("HSI damping in contact", re-derived on each gauge chain).
+double chain_contact_damping_nms(const SimConfig& config);
 
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
@@ -74,6 +77,9 @@ struct SimConfig {
   WallParams wall{};
   GaugeChain gauge_chain = GaugeChain::topology;
   StrainGaugeParams gauge{};  // the DAD 141.1's settings, when it is the chain
+  // The HSI's contact damping; empty: the gauge chain's own (chain_contact_damping_nms), which replaces the one in
+  // hsi_firmware as the gauge's calibration does.
+  std::optional<double> hsi_contact_damping_nms;
   OperatorParams operator_params{};
   fw::LeverConfig hsi_firmware = default_firmware(protocol::Role::hsi);
   fw::LeverConfig top_firmware = default_firmware(protocol::Role::top);
