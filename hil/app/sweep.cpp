@@ -150,6 +150,7 @@ int run_sweep(const SweepOptions& o) {
         c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
                          filter ? o.filter_hz_force : 0.0};
         c.topology = o.topology;
+        c.gauge_chain = o.gauge_chain;
         set_hsi_force_loop(c, o.hsi_force_loop);
         c.hsi_firmware.motion_velocity = job.variant->velocity;
         c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev = job.variant->counts_per_rev;
@@ -166,8 +167,9 @@ int run_sweep(const SweepOptions& o) {
     if (job.seed == static_cast<std::uint64_t>(o.seeds))
       table.end_point(fmt::format("{},{}", job.variant->name, 100 * job.p));
   }
-  const std::string setup =
-      fmt::format("{}, HSI force loop {}", topology_name(o.topology), o.hsi_force_loop ? "on" : "off");
+  const std::string setup = fmt::format("{}, {} gauge chain, HSI force loop {}", topology_name(o.topology),
+                                        o.gauge_chain == GaugeChain::paper_adc ? "the paper's" : "DAD 141.1",
+                                        o.hsi_force_loop ? "on" : "off");
   write_sweep(dir, table, gnuplot_script(plots(scenario_name(o.scenario), setup, o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;

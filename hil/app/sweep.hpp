@@ -28,7 +28,9 @@ struct SweepOptions {
   double filter_hz_force = 0.0;
   // The lever p sweeps (the paper's Fig. 8): the paper's setup, both levers in one PC, its HSI closing a force loop
   // (docs/hil-model.md, "The paper's chain, choice by choice").
+  // The DAD's chain: the one the loop holds the contact on (docs/hil-model.md, "The contact check").
   Topology topology = Topology::one_controller;
+  GaugeChain gauge_chain = GaugeChain::dad141;
   bool hsi_force_loop = true;
   // --over delay: the one-way delays, and p for both directions (deadband, no floor or filter).
   std::vector<double> delays_ms{0.0, 10.0, 25.0, 50.0, 100.0};

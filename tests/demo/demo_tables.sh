@@ -137,7 +137,7 @@ done
 duration=$(sed -nE 's/^sweep: [0-9]+ runs of ([0-9.]+) s .*/\1/p' "$work/out" | head -1)
 check "the demo's sweeps say their duration ($duration)" test -n "$duration"
 "$hil" run --scenario wall-tap --seed 1 --p 0.1 --duration "${duration:-1}" --topology one-controller \
-  --hsi-force-loop on --json >"$work/run.json"
+  --gauge-chain dad141 --hsi-force-loop on --json >"$work/run.json"
 for pair in "velocity_deadband_rate velocity_deadband_rate" "force_deadband_rate force_deadband_rate" \
   "velocity_packet_rate velocity_packet_rate" "force_jnd_violation force_jnd_violation"; do
   read -r rcol key <<<"$pair"

@@ -4,6 +4,7 @@
 // business producing a Fig. 8 figure.
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include "../../hil/app/cli_choices.hpp"
@@ -41,6 +42,10 @@ TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-l
           c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
           c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
           set_hsi_force_loop(c, loop);
+          if (!hsi_force_loop_offered(c) && loop) {
+            CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
+            continue;
+          }
           const auto r = run_simulation(c);
           const double armed_s = static_cast<double>(r.armed_ticks) * 1e-3;
           const double script_contacts = kScriptContactsPerS * armed_s + kScriptContactsCutCycle;

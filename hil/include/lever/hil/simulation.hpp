@@ -174,6 +174,9 @@ struct SimResult {
 // The HSI's force display closed on its own strain gauge (the paper's force control loop, IV-A-1: the received
 // force is the loop's set value), or open loop, the firmware's default.
 void set_hsi_force_loop(SimConfig& config, bool on);
+// Whether the HIL offers that loop on the run's gauge chain: not on the paper's, where it makes the contact chatter
+// (docs/hil-model.md, "The HSI's force control loop"); run_simulation refuses it there.
+bool hsi_force_loop_offered(const SimConfig& config);
 
 // The ticks from a TOP's measurement to the HSI's display of it when nothing waits: a data frame's worst-case
 // time on each bus, the bridges' latency and the network's configured delay (jitter not included), rounded up
