@@ -88,8 +88,8 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
                      ->default_str("one-controller");
   cmd.force_loop = cmd.app
                        ->add_option("--hsi-force-loop", o.hsi_force_loop,
-                                    "lever sweeps over p: the HSI's force control loop on its own gauge (the paper's), "
-                                    "on or off")
+                                    "lever sweeps over p (on the dad141 gauge chain, whose contact holds): the HSI's "
+                                    "force control loop on its own gauge (the paper's), on or off")
                        ->transform(program::one_of(kOnOff))
                        ->default_str("on");
 

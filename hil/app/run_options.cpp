@@ -153,7 +153,8 @@ void add_passivity_options(CLI::App& cmd, RunOptions& o) {
 void add_display_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--hsi-force-loop", o.hsi_force_loop,
                  "the HSI's force control loop on its own strain gauge, the received force as its set value (the "
-                 "paper's IV-A-1): on or off (open loop, the firmware's default)")
+                 "paper's IV-A-1): on or off (open loop, the firmware's default); refused on the paper-adc chain, "
+                 "where it makes the contact chatter")
       ->transform(program::one_of(kOnOff))
       ->default_str("off");
 }
@@ -226,10 +227,11 @@ void add_homing_and_fault_options(CLI::App& cmd, RunOptions& o) {
 // The TOP's force amplifier.
 void add_gauge_options(CLI::App& cmd, RunOptions& o) {
   const StrainGaugeParams gauge;
-  cmd.add_option("--gauge-chain", o.config.gauge_chain,
-                 "what reads the levers' strain gauges: dad141 (the Modbus weighing amplifier, set by --gauge-*), "
-                 "paper-adc (an AD620 and a 16-bit ADC read at 1 kHz, the paper's PC), or topology (paper-adc in one "
-                 "controller, dad141 on one or two sites)")
+  cmd.add_option(
+         "--gauge-chain", o.config.gauge_chain,
+         "what reads the levers' strain gauges: dad141 (the Modbus weighing amplifier, set by --gauge-*), "
+         "paper-adc (an AD620 and a 16-bit ADC read at 1 kHz, assumed for the paper's PC), or topology (paper-adc "
+         "in one controller, dad141 on one or two sites)")
       ->transform(program::one_of(kGaugeChains))
       ->default_str("topology");
   cmd.add_option("--gauge-filter-hz", o.config.gauge.filter_hz,
