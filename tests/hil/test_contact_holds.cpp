@@ -8,25 +8,14 @@
 #include <string>
 
 #include "../../hil/app/cli_choices.hpp"
+#include "contact_check.hpp"
 #include "lever/hil/simulation.hpp"
 
 using namespace lever;
 using namespace lever::hil;
 
-namespace {
-
-// The wall-tap script's most contacts per second over whole cycles (a reach, 3 taps and a press at their shortest:
-// 4 contacts in 1.96 s) and the most a cycle cut by the run's end adds (docs/hil-model.md, "The contact check").
-constexpr double kScriptContactsPerS = 4.0 / 1.96;
-constexpr double kScriptContactsCutCycle = 1.23;
-// Each of the script's contacts may rebound once.
-constexpr double kReboundsPerContact = 1.0;
-// A bounce of a bounce is never the script's (its contacts are 100 ms or more apart); one per run is the margin.
-constexpr std::uint64_t kReboundsOfReboundsPerRun = 1;
-
-}  // namespace
-
-// Expected to fail until the contact damping is re-derived per gauge chain (issue 39; docs/hil-model.md).
+// Expected to fail: with each chain's derived damping the paper's gauge chain still chatters open loop, and so does
+// the DAD 141.1 open loop in most runs (docs/hil-model.md, "The contact check").
 TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-loop setting",
           "[hil][contact][!shouldfail]") {
   int failing = 0, setups = 0;
@@ -47,11 +36,9 @@ TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-l
             continue;
           }
           const auto r = run_simulation(c);
-          const double armed_s = static_cast<double>(r.armed_ticks) * 1e-3;
-          const double script_contacts = kScriptContactsPerS * armed_s + kScriptContactsCutCycle;
-          const double onsets_bound = (1.0 + kReboundsPerContact) * script_contacts;
-          const bool onsets_ok = static_cast<double>(r.contact_onsets) <= onsets_bound;
-          const bool rebounds_ok = r.contact_rebounds_of_rebounds <= kReboundsOfReboundsPerRun;
+          const auto v = test::contact_verdict(r);
+          const bool onsets_ok = v.onsets_ok, rebounds_ok = v.rebounds_ok;
+          const double onsets_bound = v.onsets_bound, armed_s = static_cast<double>(r.armed_ticks) * 1e-3;
           ++setups;
           failing += !(onsets_ok && rebounds_ok);
           // The per-setup figures go to the log whether they pass or not: they are the note's before and after.
@@ -61,7 +48,8 @@ TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-l
               topology_name.c_str(), chain_name.c_str(), loop_name.c_str(), static_cast<unsigned long long>(seed),
               r.contact_onsets_per_s, onsets_bound / armed_s, static_cast<unsigned long long>(r.contact_rebounds),
               static_cast<unsigned long long>(r.contact_rebounds_of_rebounds),
-              static_cast<unsigned long long>(kReboundsOfReboundsPerRun), onsets_ok && rebounds_ok ? "" : ": CHATTERS");
+              static_cast<unsigned long long>(test::kReboundsOfReboundsPerRun),
+              onsets_ok && rebounds_ok ? "" : ": CHATTERS");
           CAPTURE(topology_name, chain_name, loop_name, seed, r.contact_onsets, onsets_bound,
                   r.contact_rebounds_of_rebounds);
           CHECK(onsets_ok);

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_check.hpp"
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
 
@@ -36,21 +37,26 @@ struct Rates {
 // The paper's wall-tap on the lever in the paper's setup (docs/hil-model.md, "The paper's chain, choice by choice"):
 // both levers in one controller (and so the paper's gauge chain), the HSI's force loop on, its deadband rule on both
 // directions, no floor, no prefilter; counted as the paper counts, the packets the deadband sends; 20 s per seed.
+SimConfig lever_setup(double p, std::uint64_t seed) {
+  SimConfig c;
+  c.scenario = ScenarioKind::wall_tap;
+  c.duration_s = 20.0;
+  c.seed = seed;
+  c.topology = Topology::one_controller;
+  // The one setup in one controller whose contact holds (docs/hil-model.md, "The contact check"): the paper's gauge
+  // chain chatters with the loop and without it.
+  c.gauge_chain = GaugeChain::dad141;
+  set_hsi_force_loop(c, true);
+  c.velocity_codec = {codec::Mode::deadband, p, 0.0, 0.0};
+  c.force_codec = {codec::Mode::deadband, p, 0.0, 0.0};
+  return c;
+}
+
 Rates lever_rates(double p, fw::MotionVelocity velocity = fw::MotionVelocity::difference) {
   Rates m;
   for (int seed = 1; seed <= kSeeds; ++seed) {
-    SimConfig c;
-    c.scenario = ScenarioKind::wall_tap;
-    c.duration_s = 20.0;
-    c.seed = static_cast<std::uint64_t>(seed);
-    c.topology = Topology::one_controller;
-    // The one setup in one controller whose contact holds (docs/hil-model.md, "The contact check"): the paper's gauge
-    // chain chatters with the loop and without it.
-    c.gauge_chain = GaugeChain::dad141;
-    set_hsi_force_loop(c, true);
+    SimConfig c = lever_setup(p, static_cast<std::uint64_t>(seed));
     c.hsi_firmware.motion_velocity = velocity;
-    c.velocity_codec = {codec::Mode::deadband, p, 0.0, 0.0};
-    c.force_codec = {codec::Mode::deadband, p, 0.0, 0.0};
     const auto r = run_simulation(c);
     m.velocity += r.velocity_deadband_rate / kSeeds;
     m.force += r.force_deadband_rate / kSeeds;
@@ -148,6 +154,12 @@ constexpr auto f = SphereDirection::force;
 
 TEST_CASE("paper fidelity: the table of what the HIL reproduces is current (docs/fidelity-table.md)",
           "[hil][paper-fidelity]") {
+  // Fig. 8's rows count only on a setup whose contact holds: the contact check's bounds at p = 0, its seeds.
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const auto r = run_simulation(lever_setup(0.0, seed));
+    CAPTURE(seed, r.contact_onsets, r.contact_rebounds_of_rebounds);
+    REQUIRE(test::contact_verdict(r).holds());
+  }
   Table t;
   // Fig. 8: "The traffic volume induced by velocity packets is already at 25% at a deadband size of p=10% and keeps
   // falling with increasing deadband size. ... Already at p=2.5% the network traffic volume in the backward path is

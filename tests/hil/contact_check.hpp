@@ -1,0 +1,35 @@
+#pragma once
+// The contact check's bounds (docs/hil-model.md, "The contact check"), for the check itself and for the tests whose
+// figures count only on a setup whose contact holds (the fidelity table's Fig. 8 rows).
+#include <cstdint>
+
+#include "lever/hil/simulation.hpp"
+
+namespace lever::test {
+
+// The wall-tap script's most contacts per second over whole cycles (a reach, 3 taps and a press at their shortest:
+// 4 contacts in 1.96 s) and the most a cycle cut by the run's end adds.
+constexpr double kScriptContactsPerS = 4.0 / 1.96;
+constexpr double kScriptContactsCutCycle = 1.23;
+// Each of the script's contacts may rebound once.
+constexpr double kReboundsPerContact = 1.0;
+// A bounce of a bounce is never the script's (its contacts are 100 ms or more apart); one per run is the margin.
+constexpr std::uint64_t kReboundsOfReboundsPerRun = 1;
+
+struct ContactVerdict {
+  double onsets_bound = 0.0;  // contact onsets the run may have
+  bool onsets_ok = false, rebounds_ok = false;
+  bool holds() const { return onsets_ok && rebounds_ok; }
+};
+
+// A wall-tap run at p = 0 (the check's setting; the caller sets it up).
+inline ContactVerdict contact_verdict(const hil::SimResult& r) {
+  ContactVerdict v;
+  const double armed_s = static_cast<double>(r.armed_ticks) * 1e-3;
+  v.onsets_bound = (1.0 + kReboundsPerContact) * (kScriptContactsPerS * armed_s + kScriptContactsCutCycle);
+  v.onsets_ok = static_cast<double>(r.contact_onsets) <= v.onsets_bound;
+  v.rebounds_ok = r.contact_rebounds_of_rebounds <= kReboundsOfReboundsPerRun;
+  return v;
+}
+
+}  // namespace lever::test
