@@ -38,6 +38,8 @@ SimConfig serve_sim_config(const ServeOptions& o, const ServePair& pair) {
   sim.velocity_codec = pair.hsi.lever.motion_codec;
   sim.force_codec = pair.top.lever.force_codec;
   sim.hsi_firmware = pair.hsi.lever;
+  // The pair's HSI runs its own configuration's contact damping, not the one the HIL derives for its gauge chain.
+  sim.hsi_contact_damping_nms = pair.hsi.lever.display.contact_damping_nms;
   sim.top_firmware = pair.top.lever;
   return sim;
 }
