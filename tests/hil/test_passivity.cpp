@@ -245,10 +245,10 @@ TEST_CASE("at 10 ms, after a contact tdpa leaves the TOP at rest within 10 mrad 
 
 // What the display's spread spending buys (PassivityConfig::display_spend_time_s): against the literature's
 // controller, which lets the held energy out at once and then cuts the whole force, the same runs at 50 ms.
-// Direction only: it was chosen after docs/firmware.md's table was measured, and the difference has been within the
-// seeds' spread (docs/firmware.md, "No longer measurable").
+// Direction only: it was chosen after docs/firmware.md's table was measured. Not met now: the difference is within
+// the seeds' spread (docs/firmware.md, "No longer measurable").
 TEST_CASE("at 50 ms the display's spread spending gives fewer contact onsets than spending at once",
-          "[hil][passivity]") {
+          "[hil][passivity][!shouldfail]") {
   double spread = 0.0, at_once = 0.0;
   for (const auto seed : kSeeds) {
     spread += tdpa_run(50.0, seed).onsets_per_s;
