@@ -157,7 +157,7 @@ done
 # The simulated study session: labelled, its threshold the log's, its plot titled simulated.
 study=$(sed -n "/^== lever-study:/,/^Plots:/p" "$work/out")
 log=$work/demo/study/sim01.jsonl
-check "the demo's study section is there and says SIMULATED" grep -q "SIMULATED observer" <<<"$study"
+check "the demo's study section is there and says SIMULATED" grep -q "^== lever-study: .* SIMULATED$" <<<"$study"
 check "the demo's study summary marks the session simulated" grep -q "^SIMULATED sessions among these logs" <<<"$study"
 check "the demo wrote a simulated session log" grep -q '"simulated":true' <(head -1 "$log")
 threshold=$("$build/bin/lever-study" report --format csv "$log" | awk -F, 'NR == 2 { printf "%.2f%%", 100 * $7 }')
