@@ -1,6 +1,6 @@
 // lever-study: the paper's user-study procedures off the bench. `simulate` runs the 3IFC staircase many times for a
 // simulated observer of known threshold and reports what it estimates; `report` summarises session logs as the
-// paper's Fig. 7 and Fig. 11 do (docs/study.md).
+// paper's Fig. 7, Fig. 8 and Fig. 11 do (report.cpp, docs/study.md).
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -24,6 +24,7 @@
 #include "lever/study/rating.hpp"
 #include "lever/study/session_log.hpp"
 #include "lever/study/three_ifc.hpp"
+#include "report.hpp"
 #include "session_runner.hpp"
 
 namespace {
@@ -33,7 +34,6 @@ namespace study = lever::study;
 using Clock = std::chrono::steady_clock;
 
 enum class Format { text, json, csv };
-enum class Table { thresholds, ratings };
 
 struct SimulateOptions {
   std::vector<double> thresholds{0.05, 0.10, 0.15};
@@ -64,12 +64,6 @@ struct RunOptions {
   study::ThreeIfcConfig three_ifc;
   study::RatingConfig rating;
   std::optional<double> interval_s;
-};
-
-struct ReportOptions {
-  std::vector<std::string> logs;
-  Format format = Format::text;
-  Table table = Table::thresholds;
 };
 
 int fail(int code, const std::string& message) {
@@ -247,98 +241,6 @@ int simulated_session(const SessionOptions& o) {
   }
 }
 
-struct SubjectThreshold {
-  std::string log, subject;
-  bool simulated = false;
-  std::vector<study::PassResult> passes;
-  std::optional<double> threshold;
-  bool reached = false;
-};
-
-int report(const ReportOptions& o) {
-  std::vector<SubjectThreshold> thresholds;
-  struct Cell {
-    std::vector<double> ratings;
-    bool simulated = false;
-  };
-  std::map<std::pair<std::string, double>, Cell> ratings;  // (direction, p)
-  bool any_simulated = false;
-  for (const auto& path : o.logs) {
-    try {
-      const auto log = study::read_session_log(path);
-      for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
-      any_simulated = any_simulated || log.header.simulated;
-      const auto procedure = study::resume(log);
-      if (const auto* s = dynamic_cast<const study::ThreeIfcStaircase*>(procedure.get())) {
-        thresholds.push_back(
-            {path, log.header.subject, log.header.simulated, s->passes(), s->threshold(), s->reached()});
-      } else if (const auto* r = dynamic_cast<const study::RatingRun*>(procedure.get())) {
-        for (const auto& rating : r->ratings()) {
-          auto& cell = ratings[{std::string(study::name(rating.direction)), rating.p}];
-          cell.ratings.push_back(rating.rating);
-          cell.simulated = cell.simulated || log.header.simulated;
-        }
-      }
-    } catch (const study::SessionLogError& e) {
-      return fail(2, program::printable(e.what()));
-    }
-  }
-  const auto pass_p = [](const SubjectThreshold& t, std::size_t i) {
-    return i < t.passes.size() ? fmt::format("{}", t.passes[i].p) : std::string();
-  };
-  if (o.format == Format::csv) {
-    if (o.table == Table::thresholds) {
-      fmt::print("log,subject,simulated,pass1,pass2,pass3,threshold,complete,reached\n");
-      for (const auto& t : thresholds)
-        fmt::print("{},{},{},{},{},{},{},{},{}\n", program::printable(t.log), program::printable(t.subject),
-                   t.simulated, pass_p(t, 0), pass_p(t, 1), pass_p(t, 2),
-                   t.threshold ? fmt::format("{}", *t.threshold) : "", t.threshold.has_value(), t.reached);
-    } else {
-      fmt::print("direction,p,simulated,n,mean,sd,min,max\n");
-      for (const auto& [key, cell] : ratings) {
-        const auto s = study::spread_of(cell.ratings);
-        fmt::print("{},{},{},{},{},{},{},{}\n", key.first, key.second, cell.simulated, s.n, s.mean, s.sd, s.min, s.max);
-      }
-    }
-    return 0;
-  }
-  if (any_simulated) fmt::print("SIMULATED sessions among these logs (marked *): they are not data\n");
-  if (!thresholds.empty()) {
-    fmt::print("3IFC detection thresholds (Fig. 7)\n{:<16} {:>8} {:>8} {:>8} {:>10}\n", "subject", "pass 1", "pass 2",
-               "pass 3", "threshold");
-    int complete = 0, above10 = 0, above11 = 0;
-    for (const auto& t : thresholds) {
-      const auto cell = [&](std::size_t i) {
-        return i < t.passes.size() ? fmt::format("{:.2f}%{}", 100 * t.passes[i].p, t.passes[i].reached ? "" : "!")
-                                   : std::string("-");
-      };
-      fmt::print("{:<16} {:>8} {:>8} {:>8} {:>10}\n", program::printable(t.subject) + (t.simulated ? " *" : ""),
-                 cell(0), cell(1), cell(2), t.threshold ? fmt::format("{:.2f}%", 100 * *t.threshold) : "incomplete");
-      if (t.threshold) {
-        ++complete;
-        above10 += *t.threshold > 0.10 + 1e-9;
-        above11 += *t.threshold > 0.11 + 1e-9;
-      }
-    }
-    if (complete > 0)
-      fmt::print("{} complete: above 10 %: {} ({:.0f} %), above 11 %: {} ({:.0f} %)\n", complete, above10,
-                 100.0 * above10 / complete, above11, 100.0 * above11 / complete);
-    if (std::any_of(thresholds.begin(), thresholds.end(), [](const auto& t) {
-          return std::any_of(t.passes.begin(), t.passes.end(), [](const auto& pass) { return !pass.reached; });
-        }))
-      fmt::print("! a pass that ended at its trial limit, not by three right answers in a row\n");
-  }
-  if (!ratings.empty()) {
-    fmt::print("ratings against p (Fig. 11)\n{:<9} {:>7} {:>4} {:>6} {:>6}\n", "direction", "p", "n", "mean", "sd");
-    for (const auto& [key, cell] : ratings) {
-      const auto s = study::spread_of(cell.ratings);
-      fmt::print("{:<9} {:>6.1f}% {:>4} {:>6.2f} {:>6.2f}{}\n", key.first, 100 * key.second, s.n, s.mean, s.sd,
-                 cell.simulated ? " *" : "");
-    }
-  }
-  return 0;
-}
-
 }  // namespace
 
 // A session on a pair. A new log takes its seed from --seed or, by default, from the system's random source, and
@@ -392,9 +294,10 @@ int main(int argc, char** argv) {
       "spread of what it estimates; report summarises session logs (docs/study.md)."};
   program::describe(app, "lever-study");
   app.footer(
-      "Exit status: 0 done; 1 a runtime failure (run: the bus or the pair; the log keeps every trial so far); 2 bad\n"
-      "input (an option, a session log that is missing, damaged, or does not match its own config and seed); 3 run:\n"
-      "the answers' input ended before the session; 130 run: stopped by SIGINT or SIGTERM.");
+      "Exit status: 0 done; 1 a runtime failure (run: the bus or the pair; the log keeps every trial so far; report\n"
+      "--plots: a directory that cannot be made, gnuplot missing or failed); 2 bad input (an option, a session log\n"
+      "that is missing, damaged, or does not match its own config and seed, a --plots that is a file); 3 run: the\n"
+      "answers' input ended before the session; 130 run: stopped by SIGINT or SIGTERM.");
   const program::Choices<Format> formats{{"text", Format::text}, {"json", Format::json}, {"csv", Format::csv}};
 
   SimulateOptions s;
@@ -480,22 +383,36 @@ int main(int argc, char** argv) {
       ->check(program::number({1.0, 86400.0, false, false, "a time in seconds"}))
       ->default_str("300");
 
-  ReportOptions r;
-  const program::Choices<Table> tables{{"thresholds", Table::thresholds}, {"ratings", Table::ratings}};
-  CLI::App* rep =
-      app.add_subcommand("report", "per-subject thresholds (Fig. 7) and ratings against p (Fig. 11) from session logs");
+  study::ReportOptions r;
+  Format report_format = Format::text;
+  const program::Choices<study::ReportTable> tables{{"thresholds", study::ReportTable::thresholds},
+                                                    {"traffic", study::ReportTable::traffic},
+                                                    {"ratings", study::ReportTable::ratings}};
+  CLI::App* rep = app.add_subcommand(
+      "report",
+      "per-subject thresholds (Fig. 7), traffic against p (Fig. 8) and ratings against p (Fig. 11) from session logs");
   rep->add_option("logs", r.logs, "session logs (JSON Lines)")->required()->check(program::path());
-  rep->add_option("--format", r.format, "text or csv")
+  rep->add_option("--format", report_format, "text or csv")
       ->transform(program::one_of(program::Choices<Format>{{"text", Format::text}, {"csv", Format::csv}}))
       ->default_str("text");
-  rep->add_option("--table", r.table, "with --format csv: thresholds or ratings")
-      ->transform(program::one_of(tables))
-      ->default_str("thresholds");
+  CLI::Option* table_option =
+      rep->add_option("--table", r.table,
+                      "thresholds, traffic or ratings: the one table of --format csv (default thresholds); with text, "
+                      "that table alone (default: every table the logs fill)")
+          ->transform(program::one_of(tables))
+          ->default_str("thresholds");
+  rep->add_option(
+         "--plots", r.plots,
+         "a directory (made if missing) for fig7.png, fig8.png and fig11.png (those the logs fill), the tables "
+         "as CSV and plots.gp, drawn by gnuplot")
+      ->check(program::path());
   app.require_subcommand(1);
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
   if (run_cmd->parsed()) return run(ro);
   if (sim->parsed()) return simulate(s);
   if (ses->parsed()) return simulated_session(so);
-  return report(r);
+  r.csv = report_format == Format::csv;
+  r.table_given = table_option->count() > 0;
+  return study::report(r);
 }

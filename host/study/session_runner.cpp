@@ -15,6 +15,7 @@
 #include <string>
 
 #include "lever/platform/socketcan.hpp"
+#include "lever/study/answer_lines.hpp"
 #include "lever/study/pair_watch.hpp"
 
 namespace lever::study {
@@ -72,12 +73,12 @@ class SessionIo {
 
   // Reads the bus (and, when `line` is given, the answers' input) for up to `wait`; returns early once a whole
   // line is in. A Stop for a signal, a bus that failed, or the answers' end while a line was wanted.
-  std::optional<Stop> pump(Clock::duration wait, std::optional<std::string>* line = nullptr) {
+  std::optional<Stop> pump(Clock::duration wait, std::optional<AnswerLine>* line = nullptr) {
     const auto deadline = Clock::now() + wait;
     while (true) {
       if (stop_signal != 0) return Stop{kSessionInterrupted, fmt::format("stopped by signal {}", int{stop_signal})};
-      if (line != nullptr && take_line(*line)) return std::nullopt;
-      if (line != nullptr && input_ended_) return Stop{kAnswersEnded, "the answers' input ended"};
+      if (line != nullptr && (*line = input_.take())) return std::nullopt;
+      if (line != nullptr && input_.ended()) return Stop{kAnswersEnded, "the answers' input ended"};
       const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
       if (left <= 0) return std::nullopt;
       pollfd fds[2] = {{can_.fd(), POLLIN, 0}, {STDIN_FILENO, POLLIN, 0}};
@@ -122,36 +123,22 @@ class SessionIo {
     }
   }
 
+  // Read only while no whole line waits (pump takes one first), so the lines held stay within one read.
   void read_input() {
     char buffer[256];
     const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
     if (n > 0) {
-      input_.append(buffer, static_cast<std::size_t>(n));
+      input_.feed({buffer, static_cast<std::size_t>(n)});
     } else if (n == 0 || (errno != EINTR && errno != EAGAIN)) {
-      input_ended_ = true;
+      input_.end();
     }
-  }
-
-  bool take_line(std::optional<std::string>& line) {
-    const auto end = input_.find('\n');
-    if (end == std::string::npos) {
-      if (!input_ended_ || input_.empty()) return false;
-      line = input_;  // a last line without its newline still counts
-      input_.clear();
-      return true;
-    }
-    line = input_.substr(0, end);
-    input_.erase(0, end + 1);
-    if (!line->empty() && line->back() == '\r') line->pop_back();
-    return true;
   }
 
   platform::SocketCan can_;
   PairWatch watch_;
   std::uint8_t pair_;
   std::FILE* progress_;
-  std::string input_;
-  bool input_ended_ = false;
+  AnswerLines input_;
 };
 
 std::chrono::microseconds seconds(double s) { return std::chrono::microseconds(static_cast<std::int64_t>(s * 1e6)); }
@@ -387,7 +374,7 @@ class Runner {
           io_.say(count > 1 ? fmt::format("Interval {} of {}: over.", i + 1, count) : "Interval: over.");
       } else {
         // Until the subject (or the experimenter at the subject's terminal) says it is enough.
-        std::optional<std::string> line;
+        std::optional<AnswerLine> line;
         if (auto stop = io_.pump(std::chrono::hours(24), &line)) return stop;
         if (const auto why = spoiled(); !why.empty()) void_reason = fmt::format("during the interval: {}", why);
       }
@@ -413,13 +400,13 @@ class Runner {
                           trial.answer_min, trial.answer_max);
     io_.say(question);
     while (true) {
-      std::optional<std::string> line;
+      std::optional<AnswerLine> line;
       if (auto stop = io_.pump(std::chrono::hours(24), &line)) return stop;
-      const std::string& text = *line;
+      const std::string& text = line->text;
       int value = 0;
       std::size_t used = 0;
       try {
-        value = std::stoi(text, &used);
+        if (!line->too_long) value = std::stoi(text, &used);
       } catch (const std::exception&) {
         used = 0;
       }

@@ -4,10 +4,10 @@
   ninja, pkg-config) or a command the demo runs (gnuplot, bc): a package nothing needs fails;
 - every package owning such a file is on the list or among the packages the list's packages depend on (their
   Depends and Pre-Depends, recursively, as dpkg has them installed): a need the list does not bring fails.
-The files are the build's own record: `ninja -t inputs` of lever-hil and lever-fw-sim (objects, libraries) and
-`ninja -t deps` of their objects (every header the compiler read).
+The files are the build's own record: `ninja -t inputs` of lever-hil, lever-fw-sim and lever-study (objects,
+libraries) and `ninja -t deps` of their objects (every header the compiler read).
 
-usage: demo_packages.py REPO_ROOT BUILD_DIR   (BUILD_DIR: lever-hil and lever-fw-sim built in it)
+usage: demo_packages.py REPO_ROOT BUILD_DIR   (BUILD_DIR: lever-hil, lever-fw-sim and lever-study built in it)
 """
 import os
 import re
@@ -15,7 +15,8 @@ import shutil
 import subprocess
 import sys
 
-# Commands scripts/demo runs besides the programs it builds: bc in the script, gnuplot from lever-hil's sweeps.
+# Commands scripts/demo runs besides the programs it builds: bc in the script, gnuplot from lever-hil's sweeps and
+# lever-study's plots.
 DEMO_COMMANDS = ["bc", "gnuplot"]
 
 
@@ -83,7 +84,7 @@ def closure(roots, table):
 
 def main(root, build):
     demo = out(os.path.join(root, "scripts", "setup"), "--demo", "--list").split()
-    inputs = out("ninja", "-t", "inputs", "bin/lever-hil", "bin/lever-fw-sim", cwd=build).split()
+    inputs = out("ninja", "-t", "inputs", "bin/lever-hil", "bin/lever-fw-sim", "bin/lever-study", cwd=build).split()
     objects = [i for i in inputs if i.endswith(".o")]
     files = [os.path.abspath(os.path.join(build, i)) for i in inputs if not i.endswith(".o")]
     deps = out("ninja", "-t", "deps", *objects, cwd=build)

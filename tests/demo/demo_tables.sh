@@ -2,7 +2,8 @@
 # scripts/demo in its short mode: every figure of its two tables (Fig. 8 and Fig. 12 beside the paper) must be the
 # CSV's, found here by the column's name: the printed figure is the summary's mean (or the sum of two: the link's
 # refresh and rest-repeat frames), the summary's mean is the mean of the runs in sweep.csv, and sweep.csv's run
-# for seed 1 is what `lever-hil run` reports for the same point.
+# for seed 1 is what `lever-hil run` reports for the same point. Its simulated study session's summary is labelled
+# simulated and is what lever-study reports from the log the demo wrote.
 # usage: demo_tables.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 root=$1 build=$2
@@ -152,5 +153,17 @@ for key in velocity_packet_rate force_packet_rate; do
   want=$(jq -r ".$key" "$work/sphere.json" | awk '{ printf "%.6f", $1 }')
   check "sphere sweep.csv's velocity 3-DoF p=0.2 seed 1 $key $got is lever-hil run's $want" test "$got" = "$want"
 done
+
+# The simulated study session: labelled, its threshold the log's, its plot titled simulated.
+study=$(sed -n "/^== lever-study:/,/^Plots:/p" "$work/out")
+log=$work/demo/study/sim01.jsonl
+check "the demo's study section is there and says SIMULATED" grep -q "^== lever-study: .* SIMULATED$" <<<"$study"
+check "the demo's study summary marks the session simulated" grep -q "^SIMULATED sessions among these logs" <<<"$study"
+check "the demo wrote a simulated session log" grep -q '"simulated":true' <(head -1 "$log")
+threshold=$("$build/bin/lever-study" report --format csv "$log" | awk -F, 'NR == 2 { printf "%.2f%%", 100 * $7 }')
+check "the demo's threshold ($(grep -E '^sim01 \*' <<<"$study" | awk '{ print $NF }')) is the log's ($threshold)" \
+  grep -qE "^sim01 \* .* ${threshold}$" <<<"$study"
+check "the demo's Fig. 7 plot is a PNG titled simulated" bash -c "test -s '$work/demo/study/fig7.png' &&
+  grep -q 'set title \"SIMULATED sessions, not data: ' '$work/demo/study/plots.gp'"
 
 report "demo tables"

@@ -111,4 +111,14 @@ check "each trial's deadband interval sent fewer data frames than either plain o
                 ($n[$t.carrier - 1]) < ([$n[range(3)] | select(. != $n[$t.carrier - 1])] | min)] | all')" = true
 check "lever-study report: the subject's threshold is the mean of the three passes, 10 %" \
   bash -c "'$bin/lever-study' report '$log' | grep -E 'rig.*10(\\.0+)? ?%'"
+# Fig. 8 from the rig's log: the four answered trials' intervals, the plain ones at p = 0 (two a trial), and at the
+# carriers' 10 % and 15 % each direction's traffic below its own at p = 0.
+"$bin/lever-study" report --format csv --table traffic "$log" >"$out/traffic.csv"
+cat "$out/traffic.csv"
+check "lever-study report --table traffic: the 8 plain intervals at p = 0, per direction" \
+  test "$(awk -F, '$2 == 0 { n += $4 } END { print n }' "$out/traffic.csv")" = 16
+check "lever-study report --table traffic: at 10 % and 15 %, each direction below its traffic at p = 0" \
+  awk -F, 'NR > 1 { m[$1 " " ($2 + 0)] = $5 + 0 }
+    END { exit !(m["velocity 0.1"] < m["velocity 0"] && m["velocity 0.15"] < m["velocity 0"] &&
+                 m["force 0.1"] < m["force 0"] && m["force 0.15"] < m["force 0"]) }' "$out/traffic.csv"
 finish "a 3IFC session by lever-study on the pair"
