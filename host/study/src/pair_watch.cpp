@@ -2,20 +2,11 @@
 
 #include <fmt/format.h>
 
-#include "lever/protocol/faults.hpp"
+#include "lever/protocol/fault_names.hpp"
 
 namespace lever::study {
 
 const char* role_name(protocol::Role r) noexcept { return r == protocol::Role::hsi ? "HSI" : "TOP"; }
-
-namespace {
-std::string fault_list(protocol::FaultBits bits) {
-  std::string out;
-  for (const auto f : protocol::kAllFaults)
-    if (protocol::has(bits, f)) out += fmt::format("{}{}", out.empty() ? "" : ", ", protocol::name(f));
-  return out;
-}
-}  // namespace
 
 void PairWatch::on_frame(const protocol::CanFrame& frame, std::int64_t t_us) noexcept {
   protocol::FrameAddress address;
@@ -62,7 +53,8 @@ std::string PairWatch::not_ready(std::int64_t now_us) const {
       const auto& h = *seen.heartbeat;
       if (h.state != protocol::LeverState::armed) lever_why = fmt::format("{}", protocol::name(h.state));
       if (!h.position_valid) lever_why += lever_why.empty() ? "not homed" : ", not homed";
-      if (h.faults != 0) lever_why += fmt::format("{}faults {}", lever_why.empty() ? "" : ", ", fault_list(h.faults));
+      if (h.faults != 0)
+        lever_why += fmt::format("{}faults {}", lever_why.empty() ? "" : ", ", protocol::fault_names(h.faults, ", "));
     }
     if (!lever_why.empty()) why += fmt::format("{}{}: {}", why.empty() ? "" : "; ", role_name(role), lever_why);
   }
