@@ -141,7 +141,10 @@ void Relay::relay_can_to_network() {
   Datagram d;
   d.kind = Kind::data;
   std::int64_t timestamp = 0;
-  while (d.frame_count < kMaxFrames && !can_down_) {
+  // Recorded after the send, so that the recorder's copy is not on the way out.
+  std::array<std::pair<std::int64_t, protocol::CanFrame>, kMaxFrames> read;
+  std::size_t read_count = 0;
+  while (d.frame_count < kMaxFrames && read_count < read.size() && !can_down_) {
     protocol::CanFrame frame;
     const auto status = can_->read(frame, timestamp);
     if (status == platform::IoStatus::skipped) continue;
@@ -152,17 +155,20 @@ void Relay::relay_can_to_network() {
     }
     if (status != platform::IoStatus::ok) break;
     bus_bits_ += static_cast<std::uint64_t>(protocol::frame_bits_worst_case(frame.dlc));
-    if (recorder_) recorder_->record(timestamp != 0 ? timestamp : wall_us(), config_.can_interface, frame);
+    read[read_count++] = {timestamp != 0 ? timestamp : wall_us(), frame};
     if (!config_.allow_to_network.allows(frame.id)) {
       ++counters_.to_network.disallowed;
       continue;
     }
     d.frames[d.frame_count++] = frame;
   }
-  if (d.frame_count == 0) return;
-  if (send(d)) {
+  if (d.frame_count > 0 && send(d)) {
     counters_.to_network.frames += d.frame_count;
     ++counters_.to_network.datagrams;
+  }
+  if (recorder_) {
+    for (std::size_t i = 0; i < read_count; ++i)
+      recorder_->record(read[i].first, config_.can_interface, read[i].second);
   }
 }
 
