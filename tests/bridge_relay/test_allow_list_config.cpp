@@ -191,3 +191,33 @@ TEST_CASE("latency percentiles come out of the histogram within a bucket", "[bri
   CHECK(*h.percentile(0.99) == Approx(990).epsilon(0.06));
   CHECK(h.max() == 1000);
 }
+
+TEST_CASE("the network thread's histogram: each take is the interval since the last one", "[bridge][stats]") {
+  SharedLatencyHistogram shared;
+  CHECK(shared.take_interval().count() == 0);
+  for (int i = 1; i <= 1000; ++i) shared.add(i);
+  const LatencyHistogram first = shared.take_interval();
+  CHECK(first.count() == 1000);
+  CHECK(*first.percentile(0.5) == Approx(500).epsilon(0.06));
+  CHECK(first.max() == 1000);
+  for (int i = 0; i < 10; ++i) shared.add(20);
+  const LatencyHistogram second = shared.take_interval();
+  CHECK(second.count() == 10);  // the first thousand are not counted again
+  CHECK(*second.percentile(0.99) == Approx(20).epsilon(0.06));
+  CHECK(second.max() == 20);  // the maximum starts again
+  CHECK(shared.take_interval().count() == 0);
+}
+
+TEST_CASE("counters: one writer's increments and a snapshot", "[bridge][stats]") {
+  BridgeCounters c;
+  ++c.to_network.frames;
+  c.from_network.frames += 5;
+  ++c.send_failures;
+  c.send_failures += 2;
+  const BridgeCounters snapshot = c;
+  ++c.to_network.frames;
+  CHECK(snapshot.to_network.frames.load() == 1);
+  CHECK(c.to_network.frames.load() == 2);
+  CHECK(snapshot.from_network.frames.load() == 5);
+  CHECK(snapshot.send_failures.load() == 3);
+}
