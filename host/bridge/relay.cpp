@@ -6,6 +6,8 @@
 #include <linux/can/raw.h>
 #include <poll.h>
 #include <sodium.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/signalfd.h>
 #include <sys/socket.h>
 #include <sys/timerfd.h>
@@ -54,6 +56,10 @@ constexpr std::size_t kUdpBatch = 16;
 
 constexpr std::size_t kCanControlSize = CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t));
 
+// The threads' stacks: the relay threads need some 60 KiB (their batches live there); glibc's default of 8 MiB
+// each would all be locked and resident under mlockall.
+constexpr std::size_t kThreadStackBytes = 512 * 1024;
+
 bool set_blocking(int fd) {
   const int flags = ::fcntl(fd, F_GETFL);
   return flags >= 0 && ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) == 0;
@@ -65,6 +71,13 @@ Relay::~Relay() { stop_relay_threads(); }
 
 bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error) {
   config_ = config;
+  // Every thread of the process from here on (the recorder's writer, the relay threads) gets this stack size.
+  pthread_attr_t attributes;
+  if (::pthread_attr_init(&attributes) == 0) {
+    ::pthread_attr_setstacksize(&attributes, kThreadStackBytes);
+    ::pthread_setattr_default_np(&attributes);
+    ::pthread_attr_destroy(&attributes);
+  }
   mac_key_.emplace(key);
   record_network_name_ =
       config.record_network_interface.empty() ? config.can_interface : config.record_network_interface;
@@ -605,6 +618,37 @@ void Relay::print_stats(double interval_s) {
   bus_bits_at_last_stats_ = bus_bits;
 }
 
+void Relay::go_realtime() {
+  if (config_.realtime_priority == 0) return;
+  std::string refused;
+  // Raising the soft limit works where the hard one allows it (LimitMEMLOCK=infinity, or root); a finite limit
+  // is not tried against: MCL_FUTURE would make allocations fail later, past it, instead of mlockall now.
+  const rlimit unlimited{RLIM_INFINITY, RLIM_INFINITY};
+  ::setrlimit(RLIMIT_MEMLOCK, &unlimited);
+  rlimit limit{};
+  ::getrlimit(RLIMIT_MEMLOCK, &limit);
+  if (limit.rlim_cur != RLIM_INFINITY) {
+    refused = fmt::format("locked memory: RLIMIT_MEMLOCK is {} KiB, not unlimited", limit.rlim_cur / 1024);
+  } else if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    refused = fmt::format("mlockall: {}", std::strerror(errno));
+  }
+  // Only the relay threads: housekeeping and the recorder's writer stay under the normal policy.
+  const sched_param param{config_.realtime_priority};
+  for (auto& t : threads_) {
+    if (const int e = ::pthread_setschedparam(t.thread.native_handle(), SCHED_FIFO, &param); e != 0) {
+      refused +=
+          fmt::format("{}SCHED_FIFO {}: {}", refused.empty() ? "" : "; ", config_.realtime_priority, std::strerror(e));
+      break;
+    }
+  }
+  if (refused.empty()) return;
+  fmt::print(stderr,
+             "lever-bridge: WARNING: real-time scheduling refused ({}); relaying without it, so a busy host "
+             "lengthens the latency tail. lever-bridge@.service grants it (LimitRTPRIO=40, LimitMEMLOCK=infinity); "
+             "elsewhere CAP_SYS_NICE and CAP_IPC_LOCK do; --realtime-priority 0 asks for none\n",
+             refused);
+}
+
 void Relay::stop_relay_threads() {
   stop_.store(true, std::memory_order_release);
   wake_.fetch_add(1, std::memory_order_release);
@@ -632,6 +676,7 @@ int Relay::run() {
   try {
     relay_thread(threads_[0], &Relay::can_to_network, "lever-can-rx");
     relay_thread(threads_[1], &Relay::network_to_can, "lever-net-rx");
+    go_realtime();
   } catch (const std::system_error& e) {
     fmt::print(stderr, "lever-bridge: cannot start the relay threads: {}\n", e.what());
     stop_relay_threads();

@@ -77,6 +77,8 @@ class Relay {
   void check_can();
   void print_stats(double interval_s);
   void stop_relay_threads();
+  // SCHED_FIFO for the relay threads and mlockall, as configured; where refused, one warning.
+  void go_realtime();
 
   BridgeConfig config_;
   std::optional<MacKey> mac_key_;

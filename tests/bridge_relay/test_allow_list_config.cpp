@@ -107,7 +107,7 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
   refused("site_id = 2.5\n", "key 'site_id': must be an integer from 0 to 255, got 2.5");
   refused("site_id = -1\n", "got -1");
   refused("peer_site_id = 256\n", "key 'peer_site_id': must be an integer from 0 to 255, got 256");
-  refused("realtime_priority = 0\n", "key 'realtime_priority': must be an integer from 1 to 99, got 0");
+  refused("realtime_priority = -1\n", "key 'realtime_priority': must be an integer from 0 to 99, got -1");
   refused("realtime_priority = 100\n", "got 100");
   refused("site_id = \"7\"\n", "got '7'");
   refused("stats_json = 1\n", "key 'stats_json': expected true or false, got 1");
@@ -123,6 +123,11 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
   CHECK(c.realtime_priority == 70);
   REQUIRE(c.peer_site_id);
   CHECK(*c.peer_site_id == 1);
+
+  BridgeConfig defaults;
+  CHECK(defaults.realtime_priority == 40);  // real time unless told otherwise
+  load_config_file(write_temp("lever-bridge-no-realtime.toml", "realtime_priority = 0\n"), defaults);
+  CHECK(defaults.realtime_priority == 0);  // 0: normal scheduling
 }
 
 TEST_CASE("config paths are relative to the configuration file", "[bridge][config]") {
