@@ -6,7 +6,8 @@
 //      raw:  sendto/recvfrom of a payload as large as an encoded 1-frame datagram (the baseline);
 //      path: build a Datagram, encode (HMAC), sendto; recvfrom, decode (verify), check peer and sender,
 //            ReplayWindow::accept, and the echo side answers with a new encoded datagram the same way.
-//    Both sides wait in poll() before recvfrom, as the bridge's poll loop does, so the wake-up cost is in both.
+//    Both sides wait in poll() before recvfrom, as the bridge's poll loop did until its relay threads (which
+//    block in recvmmsg instead: docs/bridge.md, "Threads"), so the wake-up cost is in both.
 // 2. Sustained rate: a paced sender thread (1 frame per datagram) against one receiver thread doing the
 //    bridge's receive work; losses counted from the sequence numbers. Plus one unpaced run.
 // 3. The codec's own cost: encode and decode in a tight loop, no I/O.
@@ -328,7 +329,7 @@ class Pinger {
     return to_us(Clock::now() - t0);
   }
 
-  // poll() then recvfrom(), the bridge's way of waiting.
+  // poll() then recvfrom(), the bridge's way of waiting before its relay threads.
   bool receive(std::size_t& size) {
     for (;;) {
       if (!wait_for(self_.socket->fd(), POLLIN, kReplyTimeoutMs)) return false;
@@ -495,9 +496,9 @@ void count_verdict(const std::optional<lb::ReplayResult>& verdict, ReceiveTally&
   }
 }
 
-// The bridge's receive side on one thread: poll(), then drain the socket, each datagram decoded, verified and
-// passed through the replay window. Stops once every sent datagram is in, or kDrainIdle after the last one
-// arrived once the sender is done (the rest were lost).
+// The bridge's receive side as it was before its relay threads: poll(), then drain the socket, each datagram
+// decoded, verified and passed through the replay window. Stops once every sent datagram is in, or kDrainIdle after
+// the last one arrived once the sender is done (the rest were lost).
 ReceiveTally receive_frames(Link& self, const lio::SocketAddress& peer, const lb::MacKey& key,
                             const std::atomic<std::uint64_t>& sent_total) {
   ReceiveTally tally;
@@ -689,7 +690,8 @@ Json throughput_json(const std::vector<RateRun>& paced, const RateRun& unpaced, 
       {"seconds_per_run", seconds},
       {"sender", "one thread, absolute schedule (clock_nanosleep, then spin), encode + sendto per frame"},
       {"receiver",
-       "one thread like the bridge's poll loop: poll, drain recvfrom, source check, decode, site check, replay window"},
+       "one thread like the bridge's poll loop before its relay threads: poll, drain recvfrom, source check, decode, "
+       "site check, replay window"},
       {"direction", "one direction per run; a bridge pair carries the same load each way on separate hosts"},
       {"paced", runs},
       {"unpaced", to_json(unpaced)},
