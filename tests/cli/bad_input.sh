@@ -158,7 +158,7 @@ num "lever-fw-sim --duration nan" "--duration must be a duration in seconds in [
 num "lever-fw-sim --duration -1" "--duration must be" "$fw_sim" --config "$examples/top.toml" --duration -1
 num "lever-bridge --site-id nan" "--site-id must be a whole number in [0, 255], got 'nan'" "$bridge" --site-id nan
 num "lever-bridge --site-id 256" "--site-id must be a whole number in [0, 255], got 256" "$bridge" --site-id 256
-num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [1, 99], got '1.5'" \
+num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [0, 99], got '1.5'" \
   "$bridge" --realtime-priority 1.5
 expect 2 "lever-bridge: misspelt subcommand" "unknown subcommand 'kegen'; expected keygen" "$bridge" kegen
 # The same check for configuration keys (lever-fw's TOML, read by lever-fw and lever-hil serve).
