@@ -259,16 +259,27 @@ class Session {
   std::array<protocol::SettingsMessage, 2> confirmed_{};  // by role
 };
 
-study::SessionHeader header_of(const StudyOptions& o, const SimConfig& c) {
+// The procedure's configuration from the options: the protocol's own defaults, the paper's, unless given.
+nlohmann::json procedure_config(const StudyOptions& o) {
   study::ThreeIfcConfig three_ifc = o.three_ifc;
   study::RatingConfig rating = o.rating;
   if (o.interval_s) three_ifc.interval_s = rating.interval_s = *o.interval_s;
+  // A combination out of range (start_p above max_p), in the procedure's own terms, before anything runs.
+  if (o.protocol == "3ifc") {
+    study::check(three_ifc);
+    return study::to_json(three_ifc);
+  }
+  study::check(rating);
+  return study::to_json(rating);
+}
+
+study::SessionHeader header_of(const StudyOptions& o, const SimConfig& c) {
   study::SessionHeader h;
   h.protocol = o.protocol;
   h.subject = o.subject;
   h.seed = o.seed;
   h.simulated = true;
-  h.config = o.protocol == "3ifc" ? study::to_json(three_ifc) : study::to_json(rating);
+  h.config = procedure_config(o);
   h.simulator = simulator_json(o, c);
   return h;
 }
@@ -288,27 +299,31 @@ void add_study_options(CLI::App& cmd, StudyOptions& o) {
       ->default_str("1");
   cmd.add_option("--interval-s", o.interval_s, "an interval's length (paper: 20 s for 3ifc, 30 s for rating)")
       ->check(program::number({0.1, 600.0, false, false, "a time in seconds"}));
-  cmd.add_option("--gap-s", o.three_ifc.gap_s, "3ifc: the pause between a trial's intervals (our reading: 1)")
-      ->check(program::number({0.0, 60.0, false, false, "a time in seconds"}))
-      ->default_str("1");
-  cmd.add_option("--start-p", o.three_ifc.start_p, "3ifc: p of a pass's first trial (paper: 0.025)")
-      ->check(program::number(program::kWeberFraction));
-  cmd.add_option("--step", o.three_ifc.step, "3ifc: the rise of p after a wrong answer (our reading: 0.025)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  cmd.add_option("--max-p", o.three_ifc.max_p, "3ifc: the largest p (paper: 0.25)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}));
-  cmd.add_option("--right-in-a-row", o.three_ifc.right_in_a_row,
-                 "3ifc: right answers in a row that end a pass (paper: 3)")
-      ->check(program::whole(1, 100));
-  cmd.add_option("--threshold", o.threshold, "3ifc: the observer's threshold (Weibull alpha)")
-      ->check(program::number({0.0, 1.0, true, true, "a fraction"}))
-      ->default_str("0.12");
-  cmd.add_option("--slope", o.slope, "3ifc: the Weibull slope beta")
-      ->check(program::number({0.0, 100.0, true, false, "a slope"}))
-      ->default_str("3");
-  cmd.add_option("--lapse", o.lapse, "3ifc: the lapse rate lambda")
-      ->check(program::number({0.0, 0.5, false, true, "a rate"}))
-      ->default_str("0.02");
+  o.three_ifc_only.push_back(
+      cmd.add_option("--gap-s", o.three_ifc.gap_s, "3ifc: the pause between a trial's intervals (our reading: 1)")
+          ->check(program::number({0.0, 60.0, false, false, "a time in seconds"}))
+          ->default_str("1"));
+  o.three_ifc_only.push_back(
+      cmd.add_option("--start-p", o.three_ifc.start_p, "3ifc: p of a pass's first trial (paper: 0.025)")
+          ->check(program::number(program::kWeberFraction)));
+  o.three_ifc_only.push_back(
+      cmd.add_option("--step", o.three_ifc.step, "3ifc: the rise of p after a wrong answer (our reading: 0.025)")
+          ->check(program::number({0.0, 1.0, true, true, "a fraction"})));
+  o.three_ifc_only.push_back(cmd.add_option("--max-p", o.three_ifc.max_p, "3ifc: the largest p (paper: 0.25)")
+                                 ->check(program::number({0.0, 1.0, true, true, "a fraction"})));
+  o.three_ifc_only.push_back(cmd.add_option("--right-in-a-row", o.three_ifc.right_in_a_row,
+                                            "3ifc: right answers in a row that end a pass (paper: 3)")
+                                 ->check(program::whole(1, 100)));
+  o.three_ifc_only.push_back(
+      cmd.add_option("--threshold", o.threshold, "3ifc: the observer's threshold (Weibull alpha)")
+          ->check(program::number({0.0, 1.0, true, true, "a fraction"}))
+          ->default_str("0.12"));
+  o.three_ifc_only.push_back(cmd.add_option("--slope", o.slope, "3ifc: the Weibull slope beta")
+                                 ->check(program::number({0.0, 100.0, true, false, "a slope"}))
+                                 ->default_str("3"));
+  o.three_ifc_only.push_back(cmd.add_option("--lapse", o.lapse, "3ifc: the lapse rate lambda")
+                                 ->check(program::number({0.0, 0.5, false, true, "a rate"}))
+                                 ->default_str("0.02"));
   cmd.add_option("--topology", o.topology, "one-controller (the paper's PC), one-site or two-sites")
       ->transform(program::one_of(kTopologies))
       ->default_str("one-controller");
@@ -326,14 +341,14 @@ int run_study(const StudyOptions& o) {
   if (std::filesystem::exists(std::filesystem::symlink_status(o.log)))
     throw std::invalid_argument(
         fmt::format("--log {} exists: a session log is never written over", program::printable(o.log)));
+  if (o.protocol == "rating")
+    for (const auto* option : o.three_ifc_only)
+      if (option->count() > 0)
+        throw std::invalid_argument(
+            fmt::format("{} belongs to --protocol 3ifc (rating runs have no staircase)", option->get_name()));
   const SimConfig config = hil_config(o);
   const study::SessionHeader header = header_of(o, config);
-  std::unique_ptr<study::Procedure> procedure;
-  try {
-    procedure = study::make_procedure(header);
-  } catch (const study::SessionLogError& e) {
-    throw std::invalid_argument(e.what());
-  }
+  const std::unique_ptr<study::Procedure> procedure = study::make_procedure(header);
   // Atomic: a session cut short leaves no log (a simulated pair's state cannot be resumed; run it again instead).
   program::OutputFile log(o.log, "--log");
   log.write(study::to_json(header).dump() + "\n");

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "lever/hil/simulation.hpp"
 #include "lever/study/rating.hpp"
@@ -24,6 +25,7 @@ struct StudyOptions {
   Topology topology = Topology::one_controller;        // the paper's setup: both levers in one PC
   bool hsi_force_loop = true;                          // the paper's force control loop on the HSI's gauge
   double confirm_timeout_s = 1.0;
+  std::vector<const CLI::Option*> three_ifc_only;  // refused with --protocol rating, which would ignore them
 };
 
 void add_study_options(CLI::App& cmd, StudyOptions& o);

@@ -121,6 +121,9 @@ expect_bad "--interval-s nan" "--interval-s must be" --log "$work/x.jsonl" --int
 expect_bad "--topology" "--topology must be one of" --log "$work/x.jsonl" --topology mesh
 expect_bad "--seed -1" "--seed must be a seed" --log "$work/x.jsonl" --seed -1
 expect_bad "--protocol" "--protocol" --log "$work/x.jsonl" --protocol staircase
+expect_bad "--start-p above --max-p" "start_p" --log "$work/x.jsonl" --start-p 0.3 --max-p 0.25
+expect_bad "a staircase option with --protocol rating" "--start-p belongs to --protocol 3ifc" \
+  --log "$work/x.jsonl" --protocol rating --start-p 0.1
 expect_bad "--log -" "--log must name a file" --log -
 expect_bad "--log in a missing directory" "does not exist" --log "$work/no/such/x.jsonl"
 check "bad input: no log left behind" test ! -e "$work/x.jsonl"
