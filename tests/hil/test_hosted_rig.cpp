@@ -100,7 +100,7 @@ TEST_CASE("hosted rig: the console sees both levers, and a set_deadband is shown
   CHECK(seen.settings[1]->p == 0);  // addressed to the HSI only
 }
 
-TEST_CASE("hosted rig: the same frames at the same ticks give the same frames back; another seed does not",
+TEST_CASE("hosted rig: the same frames at the same ticks give the same frames back, another seed other frames",
           "[unit][hil]") {
   const auto run = [](std::uint64_t seed) {
     HostedRig rig(paper_setup(seed));

@@ -212,7 +212,7 @@ TEST_CASE("log: the runner's fields of a record survive the round trip", "[unit]
   CHECK(back.intervals[0].confirmed.is_null());
 }
 
-TEST_CASE("log: a session on a simulated pair names it in its header; other headers read as they always did",
+TEST_CASE("log: a session on a simulated pair names it in its header, other headers read as they always did",
           "[unit][study]") {
   study::SessionHeader h{"3ifc", "hil01", 3, true, study::to_json(study::ThreeIfcConfig{}), nullptr};
   const std::string plain = study::to_json(h).dump();
