@@ -114,6 +114,17 @@ tiny=(--interval-s 0.5 --gap-s 0 --right-in-a-row 1 --threshold 0.15)
 check "the same seed: the same log, byte for byte" cmp -s "$work/a.jsonl" "$work/b.jsonl"
 check "another seed: another log" test -s "$work/c.jsonl" -a -n "$(cmp "$work/a.jsonl" "$work/c.jsonl" 2>&1)"
 
+# A session stopped by SIGTERM (10-minute intervals: far from done half a second in) ends by the signal and leaves
+# neither its log nor the temporary beside it. (SIGINT: a script's background job ignores it.)
+mkdir "$work/k"
+"$hil" study --log "$work/k/k.jsonl" --interval-s 600 >/dev/null 2>&1 &
+pid=$!
+sleep 0.5
+kill -TERM "$pid"
+wait "$pid"; code=$?
+check "SIGTERM: ends by the signal, exit 143 (got $code)" test "$code" -eq 143
+check "SIGTERM: no log and no temporary left ($(ls -A "$work/k"))" test -z "$(ls -A "$work/k")"
+
 expect_bad "an existing log" "exists: a session log is never written over" --log "$work/s.jsonl"
 check "an existing log: left as it was" cmp -s "$work/s.jsonl" "$work/s.before"
 expect_bad "--interval-s 0" "--interval-s must be" --log "$work/x.jsonl" --interval-s 0
