@@ -17,10 +17,4 @@ bool HostedRig::receive(TimedFrame& frame) { return rig_->host().receive(frame);
 
 Nanos HostedRig::now() const { return rig_->now(); }
 
-SimResult HostedRig::result() {
-  SimResult r;
-  rig_->finish(r);
-  return r;
-}
-
 }  // namespace lever::hil

@@ -25,7 +25,7 @@ class HostedRig {
   // Power-up, homing and arming as in run_simulation; afterwards the scenario runs (the operator at the HSI).
   // Throws std::runtime_error when the levers do not arm within 30 s.
   void power_up();
-  // One scenario tick.
+  // One scenario tick; power_up() comes first (the scenario starts once both levers are armed).
   void step();
   // A frame from the console's node, ready at the current time; false when its transmit queue is full.
   bool send(const protocol::CanFrame& frame);
@@ -33,8 +33,6 @@ class HostedRig {
   bool receive(TimedFrame& frame);
   // The simulation's clock: from power-up, on every bus of the run.
   Nanos now() const;
-  // The run's metrics over the scenario so far (lever-hil run's report).
-  SimResult result();
   const SimConfig& config() const { return config_; }
 
  private:
