@@ -52,7 +52,7 @@ run "$codec" generate --help
 check "lever-codec generate --help lists the kinds" grep -qF "{velocity, force, force3}" "$work/out"
 
 # --- Messages: subcommands, choices -------------------------------------------------------------------------
-expect 2 "misspelt subcommand" "unknown subcommand 'rnu'; expected run, sweep or serve" "$hil" rnu --duration 1
+expect 2 "misspelt subcommand" "unknown subcommand 'rnu'; expected run, sweep, serve or study" "$hil" rnu --duration 1
 expect 2 "no subcommand" "A subcommand is required" "$hil"
 expect 2 "lever-codec: misspelt subcommand" "unknown subcommand 'genrate'; expected generate" "$codec" genrate
 expect 2 "unknown scenario" "--scenario must be one of wall-tap, free-motion, press-hold, or sphere-3dof, got 'moonwalk'" \

@@ -91,6 +91,15 @@ bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before
   return seen.changes != changes_before && same_settings(seen, wanted);
 }
 
+nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us) {
+  return {{"mode", s.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+          {"p", s.p * protocol::kPLsb},
+          {"floor", s.floor * protocol::kFloorLsb},
+          {"filter_hz", s.filter_hz * protocol::kFilterHzLsb},
+          {"changes", s.changes},
+          {"at_bus_us", at_us}};
+}
+
 std::string describe(const protocol::SettingsMessage& s) {
   const std::string filter = s.filter_hz == 0
                                  ? std::string("prefilter off")
