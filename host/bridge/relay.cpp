@@ -168,9 +168,8 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     rc.keep_files = config.record_keep_files;
     rc.rings = 2;  // kRecorderRingCanToNetwork, kRecorderRingNetworkToCan
     // The writer's wake-ups are what the recorder costs the relay: on one CPU each is a context switch and a
-    // write(2) the relay's frames can meet. Measured 2026-11-29 (scripts/bench-bridge, the rig's one vCPU, host
-    // load 7): p99 5.7 ms with a 2 ms poll, 1.4 ms with 20 ms, 1.7 ms without recording. 20 ms is 400 frames at
-    // 20 kHz in a ring of 65536.
+    // write(2) the relay's frames can meet (docs/bridge.md has the measurements). 20 ms is 400 frames at 20 kHz in
+    // a ring of 65536.
     rc.poll_interval = std::chrono::milliseconds(20);
     try {
       recorder_ = std::make_unique<CandumpRecorder>(rc);
