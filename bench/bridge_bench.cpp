@@ -6,7 +6,8 @@
 //      raw:  sendto/recvfrom of a payload as large as an encoded 1-frame datagram (the baseline);
 //      path: build a Datagram, encode (HMAC), sendto; recvfrom, decode (verify), check peer and sender,
 //            ReplayWindow::accept, and the echo side answers with a new encoded datagram the same way.
-//    Both sides wait in poll() before recvfrom, as the bridge's poll loop does, so the wake-up cost is in both.
+//    Both sides wait in poll() before recvfrom, as the bridge's poll loop did until its relay threads (which
+//    block in recvmmsg instead: docs/bridge.md, "Threads"), so the wake-up cost is in both.
 // 2. Sustained rate: a paced sender thread (1 frame per datagram) against one receiver thread doing the
 //    bridge's receive work; losses counted from the sequence numbers. Plus one unpaced run.
 // 3. The codec's own cost: encode and decode in a tight loop, no I/O.
@@ -247,7 +248,7 @@ const std::size_t kOneFrameSize = lb::encoded_size(one_frame(kSiteA, 0, 0, {}));
 template <std::size_t W>
 std::optional<lb::ReplayResult> accept_datagram(std::span<const std::uint8_t> bytes, const lio::SocketAddress& from,
                                                 const lio::SocketAddress& peer, std::uint8_t peer_site,
-                                                const lb::Key& key, lb::ReplayWindow<W>& window, lb::Datagram& out) {
+                                                const lb::MacKey& key, lb::ReplayWindow<W>& window, lb::Datagram& out) {
   if (!(from == peer)) return std::nullopt;
   if (lb::decode(bytes, key, out) != lb::WireError::none || out.sender != peer_site) return std::nullopt;
   return window.accept(out.sequence);
@@ -258,7 +259,7 @@ std::optional<lb::ReplayResult> accept_datagram(std::span<const std::uint8_t> by
 enum class Variant : std::uint8_t { raw, path };
 
 // The echo side: answers raw payloads with the same bytes, and datagrams with a new datagram of its own.
-void echo_loop(Link& self, const lio::SocketAddress& peer, const lb::Key& key, const std::atomic<bool>& stop) {
+void echo_loop(Link& self, const lio::SocketAddress& peer, const lb::MacKey& key, const std::atomic<bool>& stop) {
   std::array<std::uint8_t, kReceiveBufferSize> in{};
   std::array<std::uint8_t, lb::kMaxDatagramSize> out{};
   lb::ReplayWindow<> window;
@@ -285,7 +286,7 @@ void echo_loop(Link& self, const lio::SocketAddress& peer, const lb::Key& key, c
 // The pinging side: one round trip at a time, timed from before the send to after the reply is accepted.
 class Pinger {
  public:
-  Pinger(Link& self, const lio::SocketAddress& peer, const lb::Key& key) : self_(self), peer_(peer), key_(key) {}
+  Pinger(Link& self, const lio::SocketAddress& peer, const lb::MacKey& key) : self_(self), peer_(peer), key_(key) {}
 
   // Round-trip time in microseconds, or nullopt if no matching reply came within kReplyTimeoutMs.
   std::optional<double> round_trip_us(Variant variant) {
@@ -328,7 +329,7 @@ class Pinger {
     return to_us(Clock::now() - t0);
   }
 
-  // poll() then recvfrom(), the bridge's way of waiting.
+  // poll() then recvfrom(), the bridge's way of waiting before its relay threads.
   bool receive(std::size_t& size) {
     for (;;) {
       if (!wait_for(self_.socket->fd(), POLLIN, kReplyTimeoutMs)) return false;
@@ -340,7 +341,7 @@ class Pinger {
 
   Link& self_;
   const lio::SocketAddress& peer_;
-  const lb::Key& key_;
+  const lb::MacKey& key_;
   std::array<std::uint8_t, kReceiveBufferSize> in_{};
   std::array<std::uint8_t, lb::kMaxDatagramSize> out_{};
   lb::ReplayWindow<> window_;
@@ -385,7 +386,7 @@ LatencySamples run_ping_pong(Pinger& pinger, std::size_t round_trips, std::size_
   return samples;
 }
 
-LatencySamples measure_latency(Link& a, Link& b, const lb::Key& key, Placement cpus, std::size_t round_trips,
+LatencySamples measure_latency(Link& a, Link& b, const lb::MacKey& key, Placement cpus, std::size_t round_trips,
                                int fifo_priority) {
   std::atomic<bool> stop{false};
   bool echo_pinned = false, echo_fifo = false;
@@ -442,7 +443,7 @@ void pace_until(Clock::time_point due) {
 
 // Sends 1-frame datagrams for `seconds`: at `rate` per second on an absolute schedule (a stall is caught up as
 // a burst, so the average is the target), or as fast as possible when rate is 0.
-SendTally send_frames(Link& self, const lio::SocketAddress& peer, const lb::Key& key, double rate, double seconds) {
+SendTally send_frames(Link& self, const lio::SocketAddress& peer, const lb::MacKey& key, double rate, double seconds) {
   ::prctl(PR_SET_TIMERSLACK, 1UL);  // the default 50 us slack would make every sleep late
   SendTally tally;
   std::array<std::uint8_t, lb::kMaxDatagramSize> out{};
@@ -495,10 +496,10 @@ void count_verdict(const std::optional<lb::ReplayResult>& verdict, ReceiveTally&
   }
 }
 
-// The bridge's receive side on one thread: poll(), then drain the socket, each datagram decoded, verified and
-// passed through the replay window. Stops once every sent datagram is in, or kDrainIdle after the last one
-// arrived once the sender is done (the rest were lost).
-ReceiveTally receive_frames(Link& self, const lio::SocketAddress& peer, const lb::Key& key,
+// The bridge's receive side as it was before its relay threads: poll(), then drain the socket, each datagram
+// decoded, verified and passed through the replay window. Stops once every sent datagram is in, or kDrainIdle after
+// the last one arrived once the sender is done (the rest were lost).
+ReceiveTally receive_frames(Link& self, const lio::SocketAddress& peer, const lb::MacKey& key,
                             const std::atomic<std::uint64_t>& sent_total) {
   ReceiveTally tally;
   std::array<std::uint8_t, kReceiveBufferSize> in{};
@@ -548,7 +549,7 @@ struct RateRun {
 };
 
 // Fresh sockets per run: nothing left over from the previous run can reach this run's replay window.
-RateRun run_rate(const lb::Key& key, Placement cpus, double rate, double seconds) {
+RateRun run_rate(const lb::MacKey& key, Placement cpus, double rate, double seconds) {
   Link sender, receiver;
   open_link(sender);
   open_link(receiver);
@@ -599,7 +600,9 @@ struct CodecCost {
 
 // Batches of calls timed together (one clock read per batch, not per call); the median batch, per call.
 // Encode and decode batches alternate, after a warm-up, so that frequency changes and neighbours hit both alike.
-CodecCost measure_codec(const lb::Key& key) {
+// With a lb::Key, the one-shot HMAC that hashes the key's padded blocks every call, for comparison.
+template <typename AnyKey>
+CodecCost measure_codec(const AnyKey& key) {
   constexpr int kWarmup = 20;
   constexpr int kBatches = 301;
   constexpr int kPerBatch = 100;
@@ -687,7 +690,8 @@ Json throughput_json(const std::vector<RateRun>& paced, const RateRun& unpaced, 
       {"seconds_per_run", seconds},
       {"sender", "one thread, absolute schedule (clock_nanosleep, then spin), encode + sendto per frame"},
       {"receiver",
-       "one thread like the bridge's poll loop: poll, drain recvfrom, source check, decode, site check, replay window"},
+       "one thread like the bridge's poll loop before its relay threads: poll, drain recvfrom, source check, decode, "
+       "site check, replay window"},
       {"direction", "one direction per run; a bridge pair carries the same load each way on separate hosts"},
       {"paced", runs},
       {"unpaced", to_json(unpaced)},
@@ -721,7 +725,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const auto key = lb::generate_key();
+    const auto raw_key = lb::generate_key();
+    const lb::MacKey key(raw_key);  // as the bridge keeps it
     const auto cpus = allowed_cpus();
     const auto placement = choose_cpus(cpus);
     Link a, b;
@@ -729,6 +734,7 @@ int main(int argc, char** argv) {
     open_link(b);
 
     const auto codec = measure_codec(key);
+    const auto codec_one_shot = measure_codec(raw_key);
     const auto latency = measure_latency(a, b, key, placement, round_trips, fifo_priority);
     if (latency.lost_round_trips > kMaxLostRoundTrips) {
       fmt::print(stderr, "lever-bench-bridge: more than {} round trips lost on loopback; giving up\n",
@@ -746,8 +752,12 @@ int main(int argc, char** argv) {
         {"codec_ns",
          {{"encode_median", codec.encode_ns},
           {"decode_median", codec.decode_ns},
+          {"encode_one_shot_median", codec_one_shot.encode_ns},
+          {"decode_one_shot_median", codec_one_shot.decode_ns},
           {"calls_each", codec.calls},
-          {"note", "1-frame datagram, tight loop, no I/O; median of batches of 100 calls, per call"}}},
+          {"note",
+           "1-frame datagram, tight loop, no I/O; median of batches of 100 calls, per call; one_shot: the "
+           "key's HMAC blocks hashed every call instead of once (MacKey)"}}},
     };
     fmt::print("{}\n", out.dump(2));
   } catch (const SetupError& e) {

@@ -6,7 +6,8 @@
 //   - the verdict before the tag follows from length, magic and version alone;
 //   - bad_tag exactly when the tag is not the HMAC of the bytes before it;
 //   - a failed decode leaves Datagram{};
-//   - a decoded datagram is in range and re-encodes to the very same bytes (the encoding is canonical).
+//   - a decoded datagram is in range and re-encodes to the very same bytes (the encoding is canonical);
+//   - the precomputed key state (MacKey, the relay's) gives the same verdict and the same datagram.
 #include <sodium.h>
 
 #include <array>
@@ -50,6 +51,15 @@ bool is_empty(const Datagram& d) {
   return true;
 }
 
+// Field by field: a frame's padding bytes are not part of its value.
+bool same_frames(const Datagram& a, const Datagram& b) {
+  for (std::size_t i = 0; i < kMaxFrames; ++i) {
+    if (a.frames[i].id != b.frames[i].id || a.frames[i].dlc != b.frames[i].dlc || a.frames[i].data != b.frames[i].data)
+      return false;
+  }
+  return true;
+}
+
 bool tag_matches(std::span<const std::uint8_t> in, const Key& key) {
   if (in.size() < kTagSize) return false;
   std::array<std::uint8_t, kTagSize> tag{};
@@ -64,6 +74,15 @@ WireError check(std::span<const std::uint8_t> in, const Key& key) {
   out.sequence = 42;  // decode must overwrite everything, also on error
   const WireError error = decode(in, key, out);
   const std::size_t size = in.size();
+
+  static const MacKey mac_key(key);
+  Datagram precomputed;
+  precomputed.sequence = 42;
+  const WireError with_state = decode(in, mac_key, precomputed);
+  LEVER_FUZZ_CHECK(with_state == error, error, size);
+  LEVER_FUZZ_CHECK(precomputed.sequence == out.sequence && precomputed.frame_count == out.frame_count &&
+                       same_frames(precomputed, out),
+                   error, size);
 
   // Before the tag: length, magic and version decide alone.
   if (size < 3) {

@@ -1,5 +1,6 @@
 // lever-hil: the testbed in simulated time. `run` one scenario; `sweep` p for the paper's figures; `serve` the
-// physical world on the wall clock to real lever-fw processes.
+// physical world on the wall clock to real lever-fw processes; `study` a session of the paper's user study on the
+// simulated pair.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include "serve.hpp"
 #include "sphere.hpp"
 #include "sphere_sweep.hpp"
+#include "study.hpp"
 #include "sweep.hpp"
 
 namespace {
@@ -209,11 +211,17 @@ int main(int argc, char** argv) {
   const SweepCommand sweep = add_sweep_command(app, sweep_options);
   ServeOptions serve_options;
   auto* serve = add_serve_command(app, serve_options);
+  StudyOptions study_options;
+  auto* study_cmd = app.add_subcommand("study",
+                                       "one session of the paper's user study (3ifc or rating) on the simulated pair, "
+                                       "answered by a simulated observer, to a session log for lever-study report");
+  add_study_options(*study_cmd, study_options);
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
 
   try {
     if (run->parsed()) return run_command(run_options);
     if (serve->parsed()) return serve_command(serve_options);
+    if (study_cmd->parsed()) return run_study(study_options);
     return sweep_command(sweep_options, sweep);
   } catch (const std::invalid_argument& e) {
     fmt::print(stderr, "lever-hil: {}\n", program::printable(e.what(), 400));

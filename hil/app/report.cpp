@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "lever/protocol/fault_names.hpp"
+
 namespace lever::hil {
 namespace {
 
@@ -80,10 +82,7 @@ std::string trace_csv_row(const TraceRow& r) {
 }
 
 nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
-  nlohmann::json names = nlohmann::json::array();
-  for (const auto fault : protocol::kAllFaults)
-    if (protocol::has(f.bits, fault)) names.push_back(std::string(protocol::name(fault)));
-  return {{"count", f.count}, {"faults", names}};
+  return {{"count", f.count}, {"faults", protocol::fault_name_list(f.bits)}};
 }
 
 // What the run was configured with.
@@ -236,11 +235,8 @@ void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
   for (const auto& f : r.faults) {
     auto say = [](const FaultReport::LeverReaction& x) {
       if (!x.fault_at_s) return std::string("no fault raised");
-      std::string names;
-      for (const auto bit : protocol::kAllFaults)
-        if (protocol::has(x.latched, bit)) names += (names.empty() ? "" : "+") + std::string(name(bit));
       return fmt::format("fault at {:.3f} s ({}), safe at {:.3f} s, max torque {:.2f} N m, re-armed {}", *x.fault_at_s,
-                         names, x.safe_at_s.value_or(-1), x.max_torque_nm_during,
+                         protocol::fault_names(x.latched, "+"), x.safe_at_s.value_or(-1), x.max_torque_nm_during,
                          x.rearmed_at_s ? fmt::format("at {:.3f} s", *x.rearmed_at_s) : "never");
     };
     fmt::print(out, "  fault {}: HSI {}; TOP {}\n", f.spec.text, say(f.hsi), say(f.top));

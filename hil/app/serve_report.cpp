@@ -3,7 +3,7 @@
 #include <fmt/format.h>
 
 #include "lever/app/stats_line.hpp"
-#include "lever/protocol/faults.hpp"
+#include "lever/protocol/fault_names.hpp"
 #include "report.hpp"
 
 namespace lever::hil {
@@ -11,10 +11,7 @@ namespace {
 
 std::string faults_text(const WatchedLever& l) {
   if (!l.heartbeat || l.heartbeat->faults == 0) return "";
-  std::string names;
-  for (const auto bit : protocol::kAllFaults)
-    if (protocol::has(l.heartbeat->faults, bit)) names += (names.empty() ? " [" : "+") + std::string(name(bit));
-  return names + "]";
+  return " [" + protocol::fault_names(l.heartbeat->faults, "+") + "]";
 }
 
 int state_number(const WatchedLever& l) { return l.heartbeat ? static_cast<int>(l.heartbeat->state) : -1; }

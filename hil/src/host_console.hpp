@@ -18,6 +18,11 @@ class HostConsole {
   // have flowed; in it from the scenario's start, unless injected faults hold it back.
   void step(fw::Tick tick, fw::Tick start, bool faults_hold, SimLevers& levers);
 
+  // A program at the console (HostedRig): it sends from the console's node and reads every frame the node
+  // receives, as another process on the same bus would.
+  bool send(const protocol::CanFrame& frame) { return bus_.send(node_, frame, now_); }
+  bool receive(TimedFrame& frame) { return bus_.receive(node_, frame); }
+
  private:
   void manage(SimLevers& levers);
   void send(protocol::Opcode opcode, bool to_hsi, bool to_top, SimLevers& levers);

@@ -26,6 +26,9 @@ class SimRig {
   void scenario_step(fw::Tick tick);
   void finish(SimResult& result);
 
+  HostConsole& host() { return host_; }
+  Nanos now() const { return now_; }
+
  private:
   void step(fw::Tick tick, double t);
   void observe(double t, fw::Tick tick) const {

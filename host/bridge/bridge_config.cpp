@@ -152,7 +152,7 @@ void load_config_file(const std::filesystem::path& file, BridgeConfig& c) {
   if (const auto v = integer("can_bitrate", 10'000, 1'000'000)) c.can_bitrate = static_cast<double>(*v);
   if (const auto v = integer("site_id", 0, 255)) c.site_id = static_cast<std::uint8_t>(*v);
   if (const auto v = integer("peer_site_id", 0, 255)) c.peer_site_id = static_cast<std::uint8_t>(*v);
-  if (const auto v = integer("realtime_priority", 1, 99)) c.realtime_priority = static_cast<int>(*v);
+  if (const auto v = integer("realtime_priority", 0, 99)) c.realtime_priority = static_cast<int>(*v);
 }
 
 namespace {

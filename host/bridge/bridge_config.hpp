@@ -11,6 +11,11 @@
 
 namespace lever::bridge {
 
+// The relay threads' SCHED_FIFO priority unless told otherwise: above every ordinary task, below the kernel's
+// threaded interrupt handlers (FIFO 50, which deliver the very frames and datagrams the relay waits for) and below
+// a lever's own loop (80) and motor guard (81) where a bridge shares a board with lever-fw.
+inline constexpr int kDefaultRealtimePriority = 40;
+
 struct BridgeConfig {
   std::string can_interface;
   std::string bind;  // HOST:PORT or [IPv6]:PORT
@@ -26,10 +31,10 @@ struct BridgeConfig {
   bool stats_json = false;
   double stats_interval_s = 1.0;
   double probe_interval_s = 1.0;
-  double can_bitrate = 1e6;                  // for the bus-load figure
-  std::optional<std::uint8_t> site_id;       // default: random at start-up
-  std::optional<std::uint8_t> peer_site_id;  // when set, datagrams carrying another sender id are refused
-  int realtime_priority = 0;                 // SCHED_FIFO priority 1-99; 0: the normal policy
+  double can_bitrate = 1e6;                          // for the bus-load figure
+  std::optional<std::uint8_t> site_id;               // default: random at start-up
+  std::optional<std::uint8_t> peer_site_id;          // when set, datagrams carrying another sender id are refused
+  int realtime_priority = kDefaultRealtimePriority;  // the relay threads' SCHED_FIFO priority; 0: normal policy
 };
 
 // Reads the TOML file's keys into `config` (the command line is applied afterwards by the caller). Relative paths

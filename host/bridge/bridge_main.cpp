@@ -1,8 +1,6 @@
 // lever-bridge: joins a lever CAN bus to a remote site over UDP, authenticated, recorded and measured.
 #include <fmt/format.h>
-#include <sched.h>
 #include <sodium.h>
-#include <sys/mman.h>
 
 #include <cerrno>
 #include <csignal>
@@ -74,7 +72,7 @@ int main(int argc, char** argv) {
   lever::program::describe(app, "lever-bridge");  // --version; the footer below says more
   app.footer(
       "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
-      "socket, the recording, real-time scheduling); 2 bad input (an option, the configuration file, the key file,\n"
+      "socket, the recording); 2 bad input (an option, the configuration file, the key file,\n"
       "keygen --out naming an existing file or a missing directory).");
   std::string config_file;
   std::optional<std::string> can, bind, peer, key_file, allow, record;
@@ -99,9 +97,9 @@ int main(int argc, char** argv) {
       ->check(lever::program::whole(0, 255));
   app.add_flag("--insecure", insecure, "no authentication (a public key): for debugging only");
   app.add_option("--realtime-priority", realtime_priority,
-                 "run the relay under SCHED_FIFO at this priority (1-99) with memory locked; on a busy host "
-                 "this is what keeps the latency tail short")
-      ->check(lever::program::whole(1, 99));
+                 "SCHED_FIFO priority of the two relay threads, with memory locked (default 40; 0: normal "
+                 "scheduling); where the system refuses it, one warning and normal scheduling")
+      ->check(lever::program::whole(0, 99));
   app.add_flag("--check-config", check_only,
                "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
                "not); opens no CAN interface and no socket");
@@ -185,13 +183,6 @@ int main(int argc, char** argv) {
   Relay relay;
   std::string error;
   if (!relay.start(config, key, error)) return fail(kRuntimeFailure, error);
-  if (config.realtime_priority > 0) {
-    // The recorder's writer thread started before this and keeps the normal policy: only the relay is real time.
-    const sched_param param{config.realtime_priority};
-    if (::sched_setscheduler(0, SCHED_FIFO, &param) != 0 || ::mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
-      return fail(kRuntimeFailure, fmt::format("realtime priority {}: {} (needs root or CAP_SYS_NICE and CAP_IPC_LOCK)",
-                                               config.realtime_priority, std::strerror(errno)));
-  }
   fmt::print(stderr, "lever-bridge: {} <-> {} -> {} (allow to network {}, from network {})\n", config.can_interface,
              config.bind, config.peer, config.allow_to_network.describe(), config.allow_from_network.describe());
   return relay.run();

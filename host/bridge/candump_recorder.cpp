@@ -1,4 +1,4 @@
-// The candump recorder: a single-producer ring filled by the relay thread, drained by a writer thread into a
+// The candump recorder: single-producer rings filled by the relay threads, drained by a writer thread into a
 // can-utils log file (see candump_recorder.hpp for the format and the rules).
 #include "candump_recorder.hpp"
 
@@ -37,6 +37,9 @@ RecorderConfig validated(RecorderConfig config) {
   if (config.keep_files < 0 || config.keep_files > kMaxKeepFiles)
     throw std::invalid_argument(
         fmt::format("candump recorder: keep_files must be 0..{}, not {}", kMaxKeepFiles, config.keep_files));
+  if (config.rings == 0 || config.rings > CandumpRecorder::kMaxRings)
+    throw std::invalid_argument(
+        fmt::format("candump recorder: rings must be 1..{}, not {}", CandumpRecorder::kMaxRings, config.rings));
   if (config.poll_interval.count() <= 0)
     throw std::invalid_argument("candump recorder: poll_interval must be positive");
   return config;
@@ -58,10 +61,11 @@ std::string numbered(const fs::path& base, int n) { return fmt::format("{}.{}", 
 CandumpRecorder::CandumpRecorder(RecorderConfig config)
     : config_(validated(std::move(config))),
       mask_(std::bit_ceil(config_.queue_capacity) - 1),
-      // Value-initialised, so every page of the ring is touched here and record() never takes a page fault.
-      slots_(std::make_unique<Record[]>(mask_ + 1)),
+      rings_(std::make_unique<Ring[]>(config_.rings)),
       rotate_threshold_(config_.rotate_bytes) {
   pending_.reserve(kPendingBytes);
+  // Value-initialised, so every page of the rings is touched here and record() never takes a page fault.
+  for (std::size_t i = 0; i < config_.rings; ++i) rings_[i].slots = std::make_unique<Record[]>(mask_ + 1);
 
   // Never write through a symlink or at a directory (lever-bridge refuses devices too, at configuration time; the
   // recorder writes to one, /dev/full in its tests, but never renames it: see shift_files()).
@@ -96,51 +100,59 @@ CandumpRecorder::~CandumpRecorder() {
 
 // ---- Producer (relay thread) ----
 
-bool CandumpRecorder::record(std::int64_t timestamp_us, std::string_view iface,
+bool CandumpRecorder::record(std::size_t ring_index, std::int64_t timestamp_us, std::string_view iface,
                              const protocol::CanFrame& frame) noexcept {
-  // Counters owned by this thread: a plain load and store, no locked read-modify-write.
+  if (ring_index >= config_.rings) {
+    rejected_bad_ring_.fetch_add(1, std::memory_order_relaxed);  // a caller's bug; never on the relay's path
+    return false;
+  }
+  Ring& ring = rings_[ring_index];
+  // Counters owned by this ring's producer: a plain load and store, no locked read-modify-write.
   const auto bump = [](std::atomic<std::uint64_t>& counter) {
     counter.store(counter.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   };
   if (frame.id > protocol::kMaxStandardId || frame.dlc > frame.data.size() || timestamp_us < 0 ||
       !valid_interface_name(iface)) {
-    bump(rejected_);
+    bump(ring.rejected);
     return false;
   }
-  const std::uint64_t head = head_.load(std::memory_order_relaxed);
-  if (head - tail_cache_ > mask_) {
+  const std::uint64_t head = ring.head.load(std::memory_order_relaxed);
+  if (head - ring.tail_cache > mask_) {
     // Looks full from the last known consumer position: look again (the only access to the writer's cache line).
-    tail_cache_ = tail_.load(std::memory_order_acquire);
-    if (head - tail_cache_ > mask_) {
-      bump(dropped_);
+    ring.tail_cache = ring.tail.load(std::memory_order_acquire);
+    if (head - ring.tail_cache > mask_) {
+      bump(ring.dropped);
       return false;
     }
   }
-  Record& slot = slots_[static_cast<std::size_t>(head & mask_)];
+  Record& slot = ring.slots[static_cast<std::size_t>(head & mask_)];
   slot.timestamp_us = timestamp_us;
   std::memcpy(slot.iface.data(), iface.data(), iface.size());
   slot.iface[iface.size()] = '\0';
   slot.frame = frame;
-  head_.store(head + 1, std::memory_order_release);  // publishes the slot
+  ring.head.store(head + 1, std::memory_order_release);  // publishes the slot
   return true;
 }
 
 // ---- Any thread ----
 
 void CandumpRecorder::flush() {
-  const std::uint64_t target = head_.load(std::memory_order_acquire);
   std::unique_lock lock(mutex_);
-  if (synced_ >= target) return;
-  flush_target_ = std::max(flush_target_, target);
+  // The writer drains every ring after it has seen this request under the mutex, so it sees every record
+  // accepted before this call.
+  const std::uint64_t request = ++flush_requests_;
   wake_.notify_all();
-  synced_cv_.wait(lock, [&] { return synced_ >= target; });
+  synced_cv_.wait(lock, [&] { return synced_ >= request; });
 }
 
 RecorderStats CandumpRecorder::stats() const noexcept {
   RecorderStats s;
-  s.recorded = head_.load(std::memory_order_acquire);
-  s.dropped_queue_full = dropped_.load(std::memory_order_relaxed);
-  s.rejected = rejected_.load(std::memory_order_relaxed);
+  s.rejected = rejected_bad_ring_.load(std::memory_order_relaxed);
+  for (std::size_t i = 0; i < config_.rings; ++i) {
+    s.recorded += rings_[i].head.load(std::memory_order_acquire);
+    s.dropped_queue_full += rings_[i].dropped.load(std::memory_order_relaxed);
+    s.rejected += rings_[i].rejected.load(std::memory_order_relaxed);
+  }
   s.written = written_.load(std::memory_order_relaxed);
   s.lost = lost_.load(std::memory_order_relaxed);
   s.bytes_written = bytes_written_.load(std::memory_order_relaxed);
@@ -169,24 +181,26 @@ void CandumpRecorder::writer_loop(std::stop_token stop) {
     try {
       // Read before draining: once stop is requested no record() runs any more, so this drain gets everything.
       const bool stopping = stop.stop_requested();
-      drain();
-      const std::uint64_t done = tail_.load(std::memory_order_relaxed);  // this thread's own position
-
-      std::unique_lock lock(mutex_);
-      const bool flush_wanted = flush_target_ > synced_;
-      if (stopping || (flush_wanted && flush_target_ <= done)) {
-        lock.unlock();
+      std::uint64_t requested = 0;
+      {
+        std::lock_guard lock(mutex_);
+        requested = flush_requests_;
+      }
+      const bool flush_wanted = requested > synced_;  // synced_ is written by this thread only
+      drain(stopping || flush_wanted);
+      if (stopping || flush_wanted) {
         sync_file();
         if (stopping) close_file();
-        lock.lock();
-        synced_ = done;
-        lock.unlock();
+        {
+          std::lock_guard lock(mutex_);
+          synced_ = requested;
+        }
         synced_cv_.notify_all();
         if (stopping) return;
         continue;
       }
-      if (flush_wanted) continue;  // flush() saw frames this drain did not: drain again at once
-      wake_.wait_for(lock, stop, config_.poll_interval, [this] { return flush_target_ > synced_; });
+      std::unique_lock lock(mutex_);
+      wake_.wait_for(lock, stop, config_.poll_interval, [this] { return flush_requests_ > synced_; });
     } catch (...) {
       // Nothing here should throw (formatting goes to a fixed buffer, pending_ never grows past its reserve);
       // if something does (bad_alloc building a file name), count it and go on rather than end the process.
@@ -195,15 +209,37 @@ void CandumpRecorder::writer_loop(std::stop_token stop) {
   }
 }
 
-void CandumpRecorder::drain() {
-  std::uint64_t tail = tail_.load(std::memory_order_relaxed);
-  for (;;) {
-    const std::uint64_t head = head_.load(std::memory_order_acquire);
-    if (tail == head) break;
-    const std::uint64_t end = std::min(head, tail + kReleaseChunk);
-    for (; tail != end; ++tail) append_line(slots_[static_cast<std::size_t>(tail & mask_)]);
-    tail_.store(end, std::memory_order_release);  // the lines are copied out: the producer may reuse the slots
+void CandumpRecorder::drain(bool everything) {
+  const std::size_t count = config_.rings;
+  std::array<std::uint64_t, kMaxRings> tails{}, ends{}, released{};
+  for (std::size_t i = 0; i < count; ++i) {
+    Ring& ring = rings_[i];
+    tails[i] = released[i] = ring.tail.load(std::memory_order_relaxed);  // this thread's own position
+    const std::uint64_t head = ring.head.load(std::memory_order_acquire);
+    // Records published since the previous look wait for the next one, unless everything is wanted: a record of
+    // the other ring with an earlier stamp may still be on its way (see the header).
+    ends[i] = everything ? head : ring.seen;
+    ring.seen = head;
   }
+  for (;;) {
+    // The earliest time stamp among the rings' next records (two rings: one comparison per line).
+    std::size_t best = count;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (tails[i] == ends[i]) continue;
+      if (best == count || rings_[i].slots[static_cast<std::size_t>(tails[i] & mask_)].timestamp_us <
+                               rings_[best].slots[static_cast<std::size_t>(tails[best] & mask_)].timestamp_us) {
+        best = i;
+      }
+    }
+    if (best == count) break;
+    append_line(rings_[best].slots[static_cast<std::size_t>(tails[best] & mask_)]);
+    if (++tails[best] - released[best] >= kReleaseChunk) {
+      // The lines are copied out: the producer may reuse the slots, also in the middle of a long drain.
+      rings_[best].tail.store(tails[best], std::memory_order_release);
+      released[best] = tails[best];
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) rings_[i].tail.store(tails[i], std::memory_order_release);
   write_pending();
 }
 

@@ -16,11 +16,18 @@
 // distinct names let a replay pick one direction. Names must be 1..15 printable characters without spaces, '/'
 // or ':' (IFNAMSIZ, and canplayer stops at a longer one).
 //
-// Threads: record() is for ONE producer thread (the relay thread) at a time: it is a single-producer ring.
-// It never blocks, never allocates and makes no system call: it copies the frame into a fixed-size slot of a
-// bounded ring and publishes it with one atomic store, or, when the ring is full, drops it and counts the drop.
-// A writer thread (std::jthread) drains the ring, formats the lines with fmt and writes them with write(2).
-// flush() and stats() may be called from any thread.
+// Threads: the recorder has `rings` single-producer rings, one per relay thread, so that the two directions never
+// share a cache line or a lock. record(ring, ...) is for ONE producer thread per ring at a time. It never blocks,
+// never allocates and makes no system call: it copies the frame into a fixed-size slot of its ring and publishes
+// it with one atomic store, or, when the ring is full, drops it and counts the drop. A writer thread
+// (std::jthread) drains the rings, merging them by time stamp, formats the lines with fmt and writes them with
+// write(2). flush() and stats() may be called from any thread.
+//
+// Order: the writer takes a record only once it was already there at its previous look (one poll_interval
+// before), and among those always the one with the earliest time stamp. Records reach a ring a few microseconds
+// after their time stamp (the relay records after the send), so lines come out in time-stamp order unless a
+// relay thread stalls between stamp and record() for longer than poll_interval; a log reader must not rely on
+// more. Within one ring the order is the ring's. flush() and the destructor write everything at once.
 //
 // Files: the constructor starts a fresh `path`. A non-empty regular file already there is first shifted away as in
 // a rotation (to path.1, ...), so restarting the bridge does not truncate the last recording (with keep_files = 0
@@ -52,16 +59,17 @@ namespace lever::bridge {
 
 struct RecorderConfig {
   std::filesystem::path path;
-  std::size_t queue_capacity = 65536;  // records (40 bytes each); rounded up to a power of two; > 0
+  std::size_t queue_capacity = 65536;  // records (40 bytes each) per ring; rounded up to a power of two; > 0
+  std::size_t rings = 1;               // producers (relay threads), each with a ring of its own; 1..kMaxRings
   std::uint64_t rotate_bytes = 0;      // 0 = never rotate
   int keep_files = 5;                  // rotated files kept: path.1 .. path.<keep_files>; 0..1000
-  // How often the writer looks at the ring when it is idle; also the longest a line waits before write(2).
+  // How often the writer looks at the rings when it is idle; a line waits up to two of them before write(2).
   // 2 ms is 40 frames at 20 kHz, against 65536 slots of headroom (3.3 s). See writer_loop() for why it polls.
   std::chrono::milliseconds poll_interval{2};
 };
 
 struct RecorderStats {
-  std::uint64_t recorded = 0;            // accepted by record() (queued)
+  std::uint64_t recorded = 0;            // accepted by record() (queued); all rings
   std::uint64_t dropped_queue_full = 0;  // refused by record(): the ring was full
   std::uint64_t rejected = 0;            // refused by record(): id > 0x7FF, dlc > 8, bad name, timestamp < 0
   std::uint64_t written = 0;             // lines written to a file
@@ -77,6 +85,7 @@ class CandumpRecorder {
   // Longest line: "(" 20 digits "." 6 digits ") " 15 name " " 3 id "#" 16 data "\n".
   static constexpr std::size_t kMaxLineLength = 1 + 20 + 1 + 6 + 2 + 15 + 1 + 3 + 1 + 16 + 1;
   static constexpr std::size_t kMaxInterfaceName = 15;  // IFNAMSIZ - 1
+  static constexpr std::size_t kMaxRings = 4;
 
   // Opens (creates) config.path and starts the writer thread. Throws std::runtime_error naming the path if the
   // file cannot be created or an existing one shifted away, std::invalid_argument for a bad config.
@@ -86,9 +95,15 @@ class CandumpRecorder {
   // Drains every accepted frame to the file, fsyncs and closes it. record() must not run concurrently.
   ~CandumpRecorder();
 
-  // Queues one frame. timestamp_us: wall clock (CLOCK_REALTIME) in microseconds since the epoch. Returns false if
-  // the frame was dropped (ring full) or rejected (invalid); both are counted. One producer thread only.
-  bool record(std::int64_t timestamp_us, std::string_view iface, const protocol::CanFrame& frame) noexcept;
+  // Queues one frame in ring `ring` (< rings; another is rejected). timestamp_us: wall clock (CLOCK_REALTIME) in
+  // microseconds since the epoch. Returns false if the frame was dropped (ring full) or rejected (invalid); both
+  // are counted. One producer thread per ring.
+  bool record(std::size_t ring, std::int64_t timestamp_us, std::string_view iface,
+              const protocol::CanFrame& frame) noexcept;
+  // Ring 0.
+  bool record(std::int64_t timestamp_us, std::string_view iface, const protocol::CanFrame& frame) noexcept {
+    return record(0, timestamp_us, iface, frame);
+  }
 
   // Blocks until every frame accepted before the call is written and fsynced (or counted as lost).
   void flush();
@@ -96,7 +111,7 @@ class CandumpRecorder {
   RecorderStats stats() const noexcept;
   // The last write error ("cannot write '/var/log/x.log': No space left on device"), or "" if none.
   std::string last_error() const;
-  // The ring's capacity after rounding up.
+  // Each ring's capacity after rounding up.
   std::size_t capacity() const noexcept { return mask_ + 1; }
   const std::filesystem::path& path() const noexcept { return config_.path; }
 
@@ -107,8 +122,23 @@ class CandumpRecorder {
     protocol::CanFrame frame;
   };
 
+  static constexpr std::size_t kCacheLine = 64;
+
+  // One producer's ring: the producer's cache line (its position, its copy of the writer's, its counters), then
+  // the writer's.
+  struct Ring {
+    alignas(kCacheLine) std::atomic<std::uint64_t> head{0};  // next slot to fill; = recorded
+    std::uint64_t tail_cache = 0;
+    std::atomic<std::uint64_t> dropped{0};
+    std::atomic<std::uint64_t> rejected{0};
+    alignas(kCacheLine) std::atomic<std::uint64_t> tail{0};  // next slot to read
+    std::uint64_t seen = 0;                                  // writer: head at its previous look
+    std::unique_ptr<Record[]> slots;
+  };
+
   void writer_loop(std::stop_token stop);
-  void drain();
+  // Writes the records there at the previous look in time-stamp order, or with `everything` all there now.
+  void drain(bool everything);
   void append_line(const Record& record);
   void write_pending();
   void sync_file();
@@ -118,21 +148,13 @@ class CandumpRecorder {
   void close_file();
   void note_error(std::string_view what, std::string_view file, int error) noexcept;
 
-  static constexpr std::size_t kCacheLine = 64;
-
   const RecorderConfig config_;
   const std::size_t mask_;
-  const std::unique_ptr<Record[]> slots_;
-
-  // Producer side (relay thread): its position and its copy of the consumer's.
-  alignas(kCacheLine) std::atomic<std::uint64_t> head_{0};  // next slot to fill; = recorded
-  std::uint64_t tail_cache_ = 0;
-  std::atomic<std::uint64_t> dropped_{0};
-  std::atomic<std::uint64_t> rejected_{0};
+  const std::unique_ptr<Ring[]> rings_;
+  std::atomic<std::uint64_t> rejected_bad_ring_{0};
 
   // Consumer side (writer thread).
-  alignas(kCacheLine) std::atomic<std::uint64_t> tail_{0};  // next slot to read
-  std::atomic<std::uint64_t> written_{0};
+  alignas(kCacheLine) std::atomic<std::uint64_t> written_{0};
   std::atomic<std::uint64_t> lost_{0};
   std::atomic<std::uint64_t> bytes_written_{0};
   std::atomic<std::uint64_t> rotations_{0};
@@ -148,8 +170,8 @@ class CandumpRecorder {
   mutable std::mutex mutex_;
   std::condition_variable_any wake_;   // wakes the writer: flush requested (stop requests wake it by themselves)
   std::condition_variable synced_cv_;  // tells flush() callers that synced_ moved
-  std::uint64_t flush_target_ = 0;     // ring position flush() callers wait for
-  std::uint64_t synced_ = 0;           // ring position up to which everything is written and fsynced (or lost)
+  std::uint64_t flush_requests_ = 0;   // flush() calls so far; each one waits for its number in synced_
+  std::uint64_t synced_ = 0;           // flush requests whose frames are written and fsynced (or lost)
   std::string last_error_;
 
   std::jthread writer_;  // last: started when everything above exists, joined in the destructor

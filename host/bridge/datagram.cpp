@@ -192,7 +192,10 @@ std::size_t encoded_size(const Datagram& d) noexcept {
   return size;
 }
 
-EncodeResult encode(const Datagram& d, const Key& key, std::span<std::uint8_t> out) noexcept {
+namespace {
+
+// Everything of encode() but the tag: returns the datagram's size, the tag's bytes left for the caller.
+EncodeResult encode_untagged(const Datagram& d, std::span<std::uint8_t> out) noexcept {
   if (const auto error = validate(d); error != WireError::none) return {error, 0};
   const std::size_t size = encoded_size(d);
   if (out.size() < size) return {WireError::buffer_too_small, 0};
@@ -221,28 +224,29 @@ EncodeResult encode(const Datagram& d, const Key& key, std::span<std::uint8_t> o
     writer.u64(d.echo.receive_timestamp_us);
   }
   if (writer.position() != size - kTagSize) return {WireError::buffer_too_small, 0};  // unreachable
-
-  ensure_sodium();
-  const std::size_t authenticated = size - kTagSize;
-  crypto_auth_hmacsha512256(out.data() + authenticated, out.data(), authenticated, key.bytes.data());
   return {WireError::none, size};
 }
 
-WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out) noexcept {
-  out = Datagram{};
-  // Before the tag: only what is needed to know this is our format, in this version, of a possible size.
+// The tag of `message` under the precomputed state. final() hashes through a copy, and libsodium's SHA-512 final
+// wipes the states it finishes, so no key-derived bytes are left on the stack.
+void tag_of(const MacKey& key, std::span<const std::uint8_t> message, std::uint8_t* tag) noexcept {
+  crypto_auth_hmacsha512256_state state = key.state();
+  crypto_auth_hmacsha512256_update(&state, message.data(), message.size());
+  crypto_auth_hmacsha512256_final(&state, tag);
+}
+
+// The checks decode() makes before the tag; none means the length is that of a possible datagram.
+WireError check_before_tag(std::span<const std::uint8_t> in) noexcept {
   if (in.size() < 3) return WireError::truncated;
   if (in[0] != kMagic0 || in[1] != kMagic1) return WireError::bad_magic;
   if (in[2] != kVersion) return WireError::bad_version;
   if (in.size() < kMinDatagramSize) return WireError::truncated;
   if (in.size() > kMaxDatagramSize) return WireError::oversized;
+  return WireError::none;
+}
 
-  ensure_sodium();
+WireError decode_authentic(std::span<const std::uint8_t> in, Datagram& out) noexcept {
   const std::size_t authenticated = in.size() - kTagSize;
-  if (crypto_auth_hmacsha512256_verify(in.data() + authenticated, in.data(), authenticated, key.bytes.data()) != 0) {
-    return WireError::bad_tag;
-  }
-
   // Authentic from here on; still checked field by field, since a peer with the key can have a bug.
   Reader header(in.first(kHeaderSize));
   std::uint8_t ignored = 0;
@@ -257,6 +261,48 @@ WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out
   }
   if (error != WireError::none) out = Datagram{};
   return error;
+}
+
+}  // namespace
+
+EncodeResult encode(const Datagram& d, const Key& key, std::span<std::uint8_t> out) noexcept {
+  const auto result = encode_untagged(d, out);
+  if (!result) return result;
+  ensure_sodium();
+  const std::size_t authenticated = result.size - kTagSize;
+  crypto_auth_hmacsha512256(out.data() + authenticated, out.data(), authenticated, key.bytes.data());
+  return result;
+}
+
+EncodeResult encode(const Datagram& d, const MacKey& key, std::span<std::uint8_t> out) noexcept {
+  const auto result = encode_untagged(d, out);
+  if (!result) return result;
+  const std::size_t authenticated = result.size - kTagSize;
+  tag_of(key, out.first(authenticated), out.data() + authenticated);
+  return result;
+}
+
+WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out) noexcept {
+  out = Datagram{};
+  // Before the tag: only what is needed to know this is our format, in this version, of a possible size.
+  if (const auto error = check_before_tag(in); error != WireError::none) return error;
+  ensure_sodium();
+  const std::size_t authenticated = in.size() - kTagSize;
+  if (crypto_auth_hmacsha512256_verify(in.data() + authenticated, in.data(), authenticated, key.bytes.data()) != 0) {
+    return WireError::bad_tag;
+  }
+  return decode_authentic(in, out);
+}
+
+WireError decode(std::span<const std::uint8_t> in, const MacKey& key, Datagram& out) noexcept {
+  out = Datagram{};
+  if (const auto error = check_before_tag(in); error != WireError::none) return error;
+  const std::size_t authenticated = in.size() - kTagSize;
+  std::array<std::uint8_t, kTagSize> expected;
+  tag_of(key, in.first(authenticated), expected.data());
+  // Constant time, as crypto_auth_hmacsha512256_verify compares.
+  if (crypto_verify_32(expected.data(), in.data() + authenticated) != 0) return WireError::bad_tag;
+  return decode_authentic(in, out);
 }
 
 Datagram make_probe_reply(const Datagram& request, std::uint8_t sender, std::uint64_t sequence,

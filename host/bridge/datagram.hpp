@@ -103,6 +103,8 @@ std::size_t encoded_size(const Datagram& datagram) noexcept;
 // zero echo in a request, room in `out`) and writes nothing on error. Only the first dlc data bytes of each
 // frame are sent.
 [[nodiscard]] EncodeResult encode(const Datagram& datagram, const Key& key, std::span<std::uint8_t> out) noexcept;
+// The same with the key's HMAC state computed beforehand (key.hpp): what the relay uses on every datagram.
+[[nodiscard]] EncodeResult encode(const Datagram& datagram, const MacKey& key, std::span<std::uint8_t> out) noexcept;
 
 // Decodes one received datagram (the whole of `in`; receive into a buffer larger than kMaxDatagramSize so an
 // oversized datagram is seen as such, not cut). Checks, in this order: length at least 3, magic, version, length
@@ -110,6 +112,7 @@ std::size_t encoded_size(const Datagram& datagram) noexcept;
 // On success `out` holds the datagram; on error `out` is reset to Datagram{}.
 // Authenticity is not freshness: pass the datagram to a PeerSession (peer_session.hpp) afterwards.
 [[nodiscard]] WireError decode(std::span<const std::uint8_t> in, const Key& key, Datagram& out) noexcept;
+[[nodiscard]] WireError decode(std::span<const std::uint8_t> in, const MacKey& key, Datagram& out) noexcept;
 
 // ---- Probes (docs/datagram-format.md, "Probe") ----
 

@@ -68,6 +68,14 @@ std::string errno_text(int error) { return std::generic_category().message(error
 
 Key::~Key() { sodium_memzero(bytes.data(), bytes.size()); }
 
+MacKey::MacKey(const Key& key) noexcept {
+  // init needs no randomness, so a libsodium that cannot start its RNG still computes the state.
+  [[maybe_unused]] const bool ready = init_crypto();
+  crypto_auth_hmacsha512256_init(&state_, key.bytes.data(), key.bytes.size());
+}
+
+MacKey::~MacKey() { sodium_memzero(&state_, sizeof state_); }
+
 bool init_crypto() noexcept { return sodium_init() >= 0; }
 
 Key generate_key() {

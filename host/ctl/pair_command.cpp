@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "lever/protocol/fault_names.hpp"
+
 namespace lever::ctl {
 
 using protocol::Fault;
@@ -94,23 +96,9 @@ Judgement judge_settings(Verb verb, const protocol::SettingsMessage& before, con
   return {Outcome::done, {}};
 }
 
-std::string fault_names(protocol::FaultBits faults) {
-  std::string names;
-  for (const Fault f : protocol::kAllFaults)
-    if (protocol::has(faults, f)) names += (names.empty() ? "" : ", ") + std::string(protocol::name(f));
-  const auto known = [] {
-    protocol::FaultBits all = 0;
-    for (const Fault f : protocol::kAllFaults) all = static_cast<protocol::FaultBits>(all | protocol::bit(f));
-    return all;
-  }();
-  if (const auto unknown = static_cast<protocol::FaultBits>(faults & ~known); unknown != 0)
-    names += fmt::format("{}unknown bits 0x{:04x}", names.empty() ? "" : ", ", unknown);
-  return names.empty() ? "none" : names;
-}
-
 std::string describe(const HeartbeatMessage& h) {
   return fmt::format("{}, position {}, faults {}", protocol::name(h.state), h.position_valid ? "valid" : "not valid",
-                     fault_names(h.faults));
+                     protocol::fault_names(h.faults, ", ", "none"));
 }
 
 namespace {

@@ -58,9 +58,6 @@ std::string describe(const protocol::SettingsMessage& settings, protocol::Role r
 
 // The levers a resend goes to: the targets still pending (one already there, or refusing, is left alone).
 Targets still_pending(const Targets& targets, const Judgement& hsi, const Judgement& top) noexcept;
-
-// "comms_timeout, peer_state" (or "none").
-std::string fault_names(protocol::FaultBits faults);
 // "fault, position valid, faults comms_timeout": what the heartbeat says, for a message.
 std::string describe(const protocol::HeartbeatMessage& heartbeat);
 

@@ -13,6 +13,7 @@
 #include "lever/codec/receiver.hpp"
 #include "lever/program/exit_codes.hpp"
 #include "lever/program/text.hpp"
+#include "lever/protocol/fault_names.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::plot {
@@ -40,13 +41,6 @@ std::string message_name(const proto::FrameAddress& a) {
       return top ? "LeverHeartbeatTop" : "LeverHeartbeatHsi";
   }
   return "?";
-}
-
-std::string faults_text(std::uint16_t bits) {
-  std::string s;
-  for (const auto f : proto::kAllFaults)
-    if (proto::has(bits, f)) s += (s.empty() ? "" : "|") + std::string(proto::name(f));
-  return s;
 }
 
 // "force: predictive p 0.1000 floor 0.050 N filter 30.0 Hz (changes 2, tares 1)": a lever's settings frame, read.
@@ -214,14 +208,14 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
         (sender ? b.current.top_faults : b.current.hsi_faults) = std::popcount(m.faults);
         if (!heard[sender] || faults[sender] != m.faults) {
           if (m.faults != 0 || heard[sender])
-            s.faults_seen.push_back(
-                fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI", m.faults ? faults_text(m.faults) : "cleared"));
+            s.faults_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI",
+                                                m.faults ? proto::fault_names(m.faults, "|") : "cleared"));
           faults[sender] = m.faults;
           heard[sender] = true;
         }
         row +=
             fmt::format("{},,,,,,,,,,{},{:d},{},{},{},{},,,,,,,\n", sender ? "top" : "hsi", static_cast<int>(m.state),
-                        m.position_valid, faults_text(m.faults), m.seq_gaps, m.rejected_frames, m.counter);
+                        m.position_valid, proto::fault_names(m.faults, "|"), m.seq_gaps, m.rejected_frames, m.counter);
         break;
       }
       case proto::MessageKind::settings: {

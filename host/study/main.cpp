@@ -205,6 +205,10 @@ int simulated_session(const SessionOptions& o) {
       const auto log = study::read_session_log(o.log);
       for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
       if (!log.header.simulated) return fail(2, fmt::format("{}: not a simulated session", program::printable(o.log)));
+      // Its intervals ran on the HIL's pair, whose state is not in the log: going on without it would mix sessions.
+      if (!log.header.simulator.is_null())
+        return fail(2, fmt::format("{}: a session on lever-hil's simulated pair: run lever-hil study again instead",
+                                   program::printable(o.log)));
       procedure = study::resume(log);
       writer.emplace(study::SessionLogWriter::resume(o.log, log));
       attempt = static_cast<int>(log.records.size());

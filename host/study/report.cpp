@@ -44,6 +44,8 @@ struct Study {
   std::map<std::pair<std::string, double>, RatingCell> ratings;  // (direction, p)
   TrafficTable traffic;
   int logs = 0, simulated_logs = 0;
+  // One line for each log simulated on the HIL's pair: its traffic is the simulation's, on the simulation's clock.
+  std::vector<std::string> on_simulator;
   bool any_simulated() const { return simulated_logs > 0; }
   bool all_simulated() const { return logs > 0 && simulated_logs == logs; }
 };
@@ -55,6 +57,17 @@ Study read_logs(const std::vector<std::string>& paths) {
     for (const auto& w : log.warnings) fmt::print(stderr, "lever-study: warning: {}\n", program::printable(w));
     ++st.logs;
     if (log.header.simulated) ++st.simulated_logs;
+    if (const auto& sim = log.header.simulator; sim.is_object()) {
+      const auto field = [&](const char* key) {
+        if (!sim.contains(key)) return std::string("?");
+        const auto& v = sim.at(key);
+        return program::printable(v.is_string() ? v.get<std::string>() : v.dump());
+      };
+      st.on_simulator.push_back(fmt::format(
+          "  {}: run on a simulated pair ({}: topology {}, gauge chain {}, seed {}); its bus times are the "
+          "simulation's clock",
+          program::printable(path), field("program"), field("topology"), field("gauge_chain"), field("seed")));
+    }
     const auto procedure = resume(log);
     if (const auto* s = dynamic_cast<const ThreeIfcStaircase*>(procedure.get())) {
       st.thresholds.push_back(
@@ -287,6 +300,7 @@ int report(const ReportOptions& o) {
                                                           : ratings_csv(st));
     } else {
       if (st.any_simulated()) fmt::print("SIMULATED sessions among these logs (marked *): they are not data\n");
+      for (const auto& line : st.on_simulator) fmt::print("{}\n", line);
       const auto wanted = [&](ReportTable t) { return !o.table_given || o.table == t; };
       const auto& tally = st.traffic.tally();
       // Without --table, a table is shown when the logs have something for it.

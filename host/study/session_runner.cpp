@@ -143,15 +143,6 @@ class SessionIo {
 
 std::chrono::microseconds seconds(double s) { return std::chrono::microseconds(static_cast<std::int64_t>(s * 1e6)); }
 
-nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us) {
-  return {{"mode", s.mode == codec::Mode::predictive ? "predictive" : "deadband"},
-          {"p", s.p * protocol::kPLsb},
-          {"floor", s.floor * protocol::kFloorLsb},
-          {"filter_hz", s.filter_hz * protocol::kFilterHzLsb},
-          {"changes", s.changes},
-          {"at_bus_us", at_us}};
-}
-
 class Runner {
  public:
   Runner(const RunnerOptions& options, SessionIo& io) : options_(options), io_(io) {}

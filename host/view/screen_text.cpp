@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 
+#include "lever/protocol/fault_names.hpp"
+
 namespace lever::view {
 namespace {
 
@@ -71,7 +73,7 @@ void lever_row(std::vector<Line>& out, const PairView& pair, Role role) {
   }
   const std::string torque = from_status(lever.status ? lever.status->torque_nm : std::nullopt, "{:+.3f}");
   const std::string homed = !lever.heard ? "-" : lever.heartbeat.position_valid ? "yes" : "no";
-  const std::string faults = lever.heard ? fault_names(lever.heartbeat.faults) : "-";
+  const std::string faults = lever.heard ? protocol::fault_names(lever.heartbeat.faults, ",", "-") : "-";
   out.push_back({fmt::format("  {:<4} {:<11} {:<5} {:>10} {:>10} {:>9} {:>9}  {:>5}/{:<5} {}", hsi ? "HSI" : "TOP",
                              lever_state(lever), homed, position, velocity, force, torque, lever.heartbeats_lost,
                              lever.heartbeats_out_of_order, faults),
@@ -127,16 +129,6 @@ void history_row(std::vector<Line>& out, const char* name, const char* unit,
 }
 
 }  // namespace
-
-std::string fault_names(protocol::FaultBits bits) {
-  std::string out;
-  for (const auto f : protocol::kAllFaults) {
-    if (!protocol::has(bits, f)) continue;
-    if (!out.empty()) out += ',';
-    out += protocol::name(f);
-  }
-  return out.empty() ? "-" : out;
-}
 
 std::string clip_columns(const std::string& text, std::size_t columns) {
   std::size_t seen = 0;

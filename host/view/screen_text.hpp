@@ -43,7 +43,4 @@ std::string sparkline(const std::vector<std::optional<float>>& samples, std::siz
 // At most `columns` characters of UTF-8 text (each taken as one column wide, as the screen's are).
 std::string clip_columns(const std::string& text, std::size_t columns);
 
-// The latched faults by name, joined by commas; "-" for none.
-std::string fault_names(protocol::FaultBits bits);
-
 }  // namespace lever::view

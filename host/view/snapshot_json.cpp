@@ -1,5 +1,7 @@
 #include "snapshot_json.hpp"
 
+#include "lever/protocol/fault_names.hpp"
+
 namespace lever::view {
 namespace {
 
@@ -16,9 +18,7 @@ json direction(const DirectionView& d) {
 }
 
 json lever(const LeverView& l) {
-  json faults = json::array();
-  for (const auto f : protocol::kAllFaults)
-    if (l.heard && protocol::has(l.heartbeat.faults, f)) faults.push_back(protocol::name(f));
+  const json faults = l.heard ? json(protocol::fault_name_list(l.heartbeat.faults)) : json::array();
   json out{{"heard", l.heard},
            {"heartbeat_age_s", or_null(l.heartbeat_age_s)},
            {"silent", l.silent()},

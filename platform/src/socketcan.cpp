@@ -1,11 +1,13 @@
 #include "lever/platform/socketcan.hpp"
 
+#include <fcntl.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -42,6 +44,7 @@ Result<SocketCan> SocketCan::open(const SocketCanConfig& config) {
   for (const auto& f : config.filters) can.filters_[can.filter_count_++] = f;
   can.error_classes_ = config.error_classes & CAN_ERR_MASK;
   can.timestamps_ = config.timestamps;
+  can.blocking_ = config.blocking;
   if (const char* step = can.open_socket(can.fd_, can.ifindex_)) {
     const int err = errno;
     return Error{name + ": " + step + ": " + std::strerror(err), err};
@@ -50,7 +53,7 @@ Result<SocketCan> SocketCan::open(const SocketCanConfig& config) {
 }
 
 const char* SocketCan::open_socket(UniqueFd& fd, int& ifindex) const noexcept {
-  fd.reset(::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW));
+  fd.reset(::socket(PF_CAN, SOCK_RAW | (blocking_ ? 0 : SOCK_NONBLOCK) | SOCK_CLOEXEC, CAN_RAW));
   if (!fd) return "socket(PF_CAN)";
   ifreq ifr = request_for(name_);
   if (::ioctl(fd.get(), SIOCGIFINDEX, &ifr) < 0) return "no such CAN interface";
@@ -84,7 +87,16 @@ bool SocketCan::reopen() noexcept {
     errno_ = errno;
     return false;
   }
-  fd_ = std::move(fd);
+  if (fd_) {
+    // The new socket under the old number, the old one closed in the same step: a reader blocked on the number
+    // keeps the old socket until its call returns, then reads the new one.
+    if (::dup3(fd.get(), fd_.get(), O_CLOEXEC) < 0) {
+      errno_ = errno;
+      return false;
+    }
+  } else {
+    fd_ = std::move(fd);
+  }
   ifindex_ = ifindex;
   unbound_ = false;
   drops_before_ += drops_;
@@ -170,7 +182,7 @@ IoStatus SocketCan::write(const protocol::CanFrame& frame) noexcept {
   raw.can_id = frame.id & CAN_SFF_MASK;
   raw.can_dlc = frame.dlc > 8 ? 8 : frame.dlc;
   std::memcpy(raw.data, frame.data.data(), 8);
-  const ssize_t n = ::write(fd_.get(), &raw, sizeof raw);
+  const ssize_t n = ::send(fd_.get(), &raw, sizeof raw, MSG_DONTWAIT);
   if (n < 0) return classify(errno);
   return IoStatus::ok;
 }

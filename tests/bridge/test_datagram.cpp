@@ -26,18 +26,38 @@ Key test_key(std::uint8_t first = 1) {
   return key;
 }
 
+// Every datagram of these tests is encoded twice, with the one-shot HMAC (Key) and with the precomputed state the
+// relay uses (MacKey): the bytes must be the same, so each known answer below holds for both.
 Bytes encode_bytes(const Datagram& d, const Key& key) {
   std::array<std::uint8_t, kMaxDatagramSize> buffer{};
   const auto result = encode(d, key, buffer);
   REQUIRE(result.error == WireError::none);
+  std::array<std::uint8_t, kMaxDatagramSize> precomputed{};
+  const auto again = encode(d, MacKey(key), precomputed);
+  REQUIRE(again.error == WireError::none);
+  REQUIRE(again.size == result.size);
+  CHECK(std::equal(buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(result.size), precomputed.begin()));
   return Bytes(buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(result.size));
 }
 
-WireError decode_bytes(const Bytes& bytes, const Key& key, Datagram& out) { return decode(bytes, key, out); }
+// Decoded both ways too: the same verdict, and on success the same datagram (compared by its encoding).
+WireError decode_bytes(const Bytes& bytes, const Key& key, Datagram& out) {
+  Datagram precomputed;
+  const auto with_state = decode(bytes, MacKey(key), precomputed);
+  const auto error = decode(bytes, key, out);
+  CHECK(with_state == error);
+  if (error == WireError::none && with_state == WireError::none) {
+    std::array<std::uint8_t, kMaxDatagramSize> a{}, b{};
+    const auto ea = encode(out, key, a);
+    const auto eb = encode(precomputed, key, b);
+    CHECK((ea.size == eb.size && std::equal(a.begin(), a.end(), b.begin())));
+  }
+  return error;
+}
 
 WireError decode_bytes(const Bytes& bytes, const Key& key) {
   Datagram out;
-  return decode(bytes, key, out);
+  return decode_bytes(bytes, key, out);
 }
 
 // Replaces the last 32 bytes with the correct tag of the bytes before them.

@@ -107,7 +107,7 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
   refused("site_id = 2.5\n", "key 'site_id': must be an integer from 0 to 255, got 2.5");
   refused("site_id = -1\n", "got -1");
   refused("peer_site_id = 256\n", "key 'peer_site_id': must be an integer from 0 to 255, got 256");
-  refused("realtime_priority = 0\n", "key 'realtime_priority': must be an integer from 1 to 99, got 0");
+  refused("realtime_priority = -1\n", "key 'realtime_priority': must be an integer from 0 to 99, got -1");
   refused("realtime_priority = 100\n", "got 100");
   refused("site_id = \"7\"\n", "got '7'");
   refused("stats_json = 1\n", "key 'stats_json': expected true or false, got 1");
@@ -123,6 +123,11 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
   CHECK(c.realtime_priority == 70);
   REQUIRE(c.peer_site_id);
   CHECK(*c.peer_site_id == 1);
+
+  BridgeConfig defaults;
+  CHECK(defaults.realtime_priority == 40);  // real time unless told otherwise
+  load_config_file(write_temp("lever-bridge-no-realtime.toml", "realtime_priority = 0\n"), defaults);
+  CHECK(defaults.realtime_priority == 0);  // 0: normal scheduling
 }
 
 TEST_CASE("config paths are relative to the configuration file", "[bridge][config]") {
@@ -190,4 +195,34 @@ TEST_CASE("latency percentiles come out of the histogram within a bucket", "[bri
   CHECK(*h.percentile(0.5) == Approx(500).epsilon(0.06));
   CHECK(*h.percentile(0.99) == Approx(990).epsilon(0.06));
   CHECK(h.max() == 1000);
+}
+
+TEST_CASE("the network thread's histogram: each take is the interval since the last one", "[bridge][stats]") {
+  SharedLatencyHistogram shared;
+  CHECK(shared.take_interval().count() == 0);
+  for (int i = 1; i <= 1000; ++i) shared.add(i);
+  const LatencyHistogram first = shared.take_interval();
+  CHECK(first.count() == 1000);
+  CHECK(*first.percentile(0.5) == Approx(500).epsilon(0.06));
+  CHECK(first.max() == 1000);
+  for (int i = 0; i < 10; ++i) shared.add(20);
+  const LatencyHistogram second = shared.take_interval();
+  CHECK(second.count() == 10);  // the first thousand are not counted again
+  CHECK(*second.percentile(0.99) == Approx(20).epsilon(0.06));
+  CHECK(second.max() == 20);  // the maximum starts again
+  CHECK(shared.take_interval().count() == 0);
+}
+
+TEST_CASE("counters: one writer's increments and a snapshot", "[bridge][stats]") {
+  BridgeCounters c;
+  ++c.to_network.frames;
+  c.from_network.frames += 5;
+  ++c.send_failures;
+  c.send_failures += 2;
+  const BridgeCounters snapshot = c;
+  ++c.to_network.frames;
+  CHECK(snapshot.to_network.frames.load() == 1);
+  CHECK(c.to_network.frames.load() == 2);
+  CHECK(snapshot.from_network.frames.load() == 5);
+  CHECK(snapshot.send_failures.load() == 3);
 }

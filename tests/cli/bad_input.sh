@@ -52,7 +52,7 @@ run "$codec" generate --help
 check "lever-codec generate --help lists the kinds" grep -qF "{velocity, force, force3}" "$work/out"
 
 # --- Messages: subcommands, choices -------------------------------------------------------------------------
-expect 2 "misspelt subcommand" "unknown subcommand 'rnu'; expected run, sweep or serve" "$hil" rnu --duration 1
+expect 2 "misspelt subcommand" "unknown subcommand 'rnu'; expected run, sweep, serve or study" "$hil" rnu --duration 1
 expect 2 "no subcommand" "A subcommand is required" "$hil"
 expect 2 "lever-codec: misspelt subcommand" "unknown subcommand 'genrate'; expected generate" "$codec" genrate
 expect 2 "unknown scenario" "--scenario must be one of wall-tap, free-motion, press-hold, or sphere-3dof, got 'moonwalk'" \
@@ -158,7 +158,7 @@ num "lever-fw-sim --duration nan" "--duration must be a duration in seconds in [
 num "lever-fw-sim --duration -1" "--duration must be" "$fw_sim" --config "$examples/top.toml" --duration -1
 num "lever-bridge --site-id nan" "--site-id must be a whole number in [0, 255], got 'nan'" "$bridge" --site-id nan
 num "lever-bridge --site-id 256" "--site-id must be a whole number in [0, 255], got 256" "$bridge" --site-id 256
-num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [1, 99], got '1.5'" \
+num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole number in [0, 99], got '1.5'" \
   "$bridge" --realtime-priority 1.5
 expect 2 "lever-bridge: misspelt subcommand" "unknown subcommand 'kegen'; expected keygen" "$bridge" kegen
 # The same check for configuration keys (lever-fw's TOML, read by lever-fw and lever-hil serve).

@@ -90,7 +90,7 @@ run --config "$work/etc/bridge.toml" --check-config; ok "a config file with a ke
 check "the key was found next to the config" grep -qF "$work/etc/site.key" "$work/io/out"
 printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "other.key"\n' >"$work/etc/other.toml"
 expect_bad "a relative key missing next to the config" "$work/etc/other.key" --config "$work/etc/other.toml" --check-config
-printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\nrealtime_priority = 70\npeer_site_id = 2\nsite_id = 1\n' \
+printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\nrealtime_priority = 0\npeer_site_id = 2\nsite_id = 1\n' \
   >"$work/etc/rt.toml"
 run --config "$work/etc/rt.toml" --check-config; ok "realtime_priority, site_id and peer_site_id as TOML keys"
 expect_bad "a missing config file" "bridge-none.toml" --config "$work/bridge-none.toml" --check-config
@@ -120,7 +120,7 @@ toml_bad "site_id fractional" "key 'site_id': must be an integer from 0 to 255, 
 toml_bad "site_id 300" "got 300" "site_id = 300"
 toml_bad "peer_site_id negative" "key 'peer_site_id': must be an integer from 0 to 255, got -1" "peer_site_id = -1"
 toml_bad "site_id equal to peer_site_id" "site_id and peer_site_id are both 4" $'site_id = 4\npeer_site_id = 4'
-toml_bad "realtime_priority 0" "key 'realtime_priority': must be an integer from 1 to 99, got 0" "realtime_priority = 0"
+toml_bad "realtime_priority 100" "key 'realtime_priority': must be an integer from 0 to 99, got 100" "realtime_priority = 100"
 toml_bad "record_rotate_mb huge" "key 'record_rotate_mb'" "record_rotate_mb = 1e300"
 toml_bad "record_rotate_mb NaN" "got nan" "record_rotate_mb = nan"
 toml_bad "stats_json a string" "key 'stats_json': expected true or false, got 'yes'" 'stats_json = "yes"'
@@ -144,7 +144,8 @@ expect_bad "--key empty" "--key: the path is empty" "${net[@]}" --key ""
 expect_bad "--site-id fractional" "--site-id" "${net[@]}" --key "$key" --site-id 2.5
 expect_bad "--site-id 256" "--site-id" "${net[@]}" --key "$key" --site-id 256
 expect_bad "--peer-site-id the own site id" "both 3" "${net[@]}" --key "$key" --site-id 3 --peer-site-id 3
-expect_bad "--realtime-priority 0" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority 0
+expect_bad "--realtime-priority 100" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority 100
+expect_bad "--realtime-priority -1" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority -1
 expect_bad "--realtime-priority nan" "--realtime-priority" "${net[@]}" --key "$key" --realtime-priority nan
 expect_bad "--can missing" "--can (key 'can') is required" --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"
 expect_bad "--can too long" "not an interface name" --can a-name-far-too-long --bind 127.0.0.1:5000 --peer 127.0.0.1:5001 --key "$key"

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "lever/common/rng.hpp"
+#include "lever/protocol/fault_names.hpp"
 #include "lever/protocol/messages.hpp"
 #include "random_messages.hpp"
 
@@ -288,4 +289,17 @@ TEST_CASE("a parameter becomes the nearest code of its field, clipped", "[protoc
     REQUIRE(unsigned_code(code * kFloorLsb, kFloorLsb) == code);
     REQUIRE(unsigned_code(code * kFilterHzLsb, kFilterHzLsb) == code);
   }
+}
+
+TEST_CASE("fault names: every known bit by its name in table order, unknown bits in hex, one separator", "[protocol]") {
+  CHECK(fault_names(0, ", ", "none") == "none");
+  CHECK(fault_names(0, "+").empty());
+  CHECK(fault_names(bit(Fault::can_bus) | bit(Fault::comms_timeout), ", ") == "comms_timeout, can_bus");
+  CHECK(fault_names(bit(Fault::encoder) | bit(Fault::timing), "|") == "encoder|timing");
+  CHECK(fault_names(0x8001, ", ") == "comms_timeout, unknown bits 0x8000");
+  CHECK(fault_name_list(0x0C00) == std::vector<std::string>{"can_bus", "unknown bits 0x0800"});
+  FaultBits every = 0;
+  for (const Fault f : kAllFaults) every = static_cast<FaultBits>(every | bit(f));
+  CHECK(fault_name_list(every).size() == std::size(kAllFaults));
+  CHECK(unknown_fault_bits(every) == 0);
 }

@@ -212,9 +212,3 @@ TEST_CASE("lever-ctl: a resend goes only to the targets still pending", "[ctl]")
   CHECK((!top_only.hsi && top_only.top));
 }
 
-TEST_CASE("lever-ctl fault names: every known bit by its name, unknown bits in hex", "[ctl]") {
-  CHECK(ctl::fault_names(0) == "none");
-  CHECK(ctl::fault_names(protocol::bit(Fault::comms_timeout) | protocol::bit(Fault::can_bus)) ==
-        "comms_timeout, can_bus");
-  CHECK(ctl::fault_names(0x8001) == "comms_timeout, unknown bits 0x8000");
-}

@@ -19,6 +19,20 @@ candump -r 8388608 -L vcan1 >"$out/vcan1.log" &
 dump1=$!
 sleep 1
 
+# Real time by default (root may): the two relay threads under SCHED_FIFO 40, housekeeping under the normal policy.
+policy_of() {  # policy_of PID THREAD_NAME: "FIFO 40", "OTHER 0", ...; empty when no thread has the name
+  local task
+  for task in /proc/"$1"/task/*; do
+    [[ $(cat "$task/comm") == "$2" ]] || continue
+    chrt -p "${task##*/}" | awk -F': ' '/policy/ { sub(/^SCHED_/, "", $2); p = $2 } /priority/ { print p, $2 }'
+  done
+}
+check "relay thread lever-can-rx runs under SCHED_FIFO 40" test "$(policy_of $bridge_a lever-can-rx)" = "FIFO 40"
+check "relay thread lever-net-rx runs under SCHED_FIFO 40" test "$(policy_of $bridge_a lever-net-rx)" = "FIFO 40"
+check "housekeeping (the main thread) stays under the normal policy" \
+  test "$(chrt -p $bridge_a | awk -F': ' '/policy/ { sub(/^SCHED_/, "", $2); print $2 }')" = OTHER
+check "no real-time warning where it is allowed" test -z "$(grep -F 'real-time scheduling refused' "$out/a.err")"
+
 # vcan0 -> vcan1: 1000 motion frames with counting payloads at 1 kHz, interleaved with ids the default
 # allow-list must stop (0x160: the first id past the lever protocol's settings frames); then vcan1 -> vcan0: 500
 # force frames.
@@ -65,5 +79,31 @@ kill $dump; wait $dump 2>/dev/null
 frames "$out/bridge-a.log" >"$work/recorded"
 frames "$out/replay.log" >"$work/replayed"
 check "canplayer replays the recording frame for frame" same "$work/recorded" "$work/replayed"
+
+# Where real time is refused (an unprivileged user without LimitRTPRIO: EPERM), one warning and the frames still
+# cross.
+shared=$(mktemp -d)
+chmod 755 "$shared"
+install -o 65534 -g 65534 -m 600 "$key" "$shared/site.key"
+unprivileged() { exec setpriv --reuid 65534 --regid 65534 --clear-groups --inh-caps=-all "$@"; }
+unprivileged "$bin/lever-bridge" --can vcan0 --bind 127.0.0.1:5010 --peer 127.0.0.1:5011 --key "$shared/site.key" \
+  --site-id 1 >/dev/null 2>"$out/c.err" &
+bridge_c=$!
+unprivileged "$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5011 --peer 127.0.0.1:5010 --key "$shared/site.key" \
+  --site-id 2 >/dev/null 2>"$out/d.err" &
+bridge_d=$!
+candump -L vcan1 >"$out/unprivileged.log" &
+dump=$!
+sleep 1
+cangen vcan0 -I 102 -L 8 -D i -g 2 -n 20
+sleep 0.5
+kill -TERM $bridge_c $bridge_d
+wait $bridge_c; code_c=$?
+wait $bridge_d
+kill $dump; wait $dump 2>/dev/null
+check "unprivileged: one warning that real time was refused" \
+  test "$(grep -c 'WARNING: real-time scheduling refused' "$out/c.err")" -eq 1
+check "unprivileged: the frames still cross" test "$(grep -c ' 102#' "$out/unprivileged.log")" -eq 20
+check "unprivileged: it exits 0 on SIGTERM (exited $code_c)" test "$code_c" -eq 0
 
 finish "bridge relay"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs inside the kernel rig: a lever-bridge survives its CAN interface going down and up, its peer going away
-# and coming back, and a flood; its memory stays bounded.
+# Runs inside the kernel rig: a lever-bridge survives its CAN interface going down and up, being removed and made
+# again, its peer going away and coming back, and a flood; its memory stays bounded.
 # usage: bridge_survival.sh BIN_DIR
 set -uo pipefail
 . "$(dirname "$0")/lib.sh"
@@ -30,6 +30,24 @@ sleep 0.3
 check "frames flow before the interface went down" test "$(grep -c ' 101#01' "$out/vcan1.log")" -eq 1
 check "and again after it came back" test "$(grep -c ' 101#02' "$out/vcan1.log")" -eq 1
 check "the bridge is still running" kill -0 $bridge_a
+
+# 1b. The interface is removed and made again: the bridge reopens it under the same descriptor number (its CAN
+# thread sleeps in recvmmsg on that number), and both directions use the new socket.
+ip link del vcan0
+sleep 1
+ip link add dev vcan0 type vcan
+ip link set vcan0 up
+sleep 1.5
+candump -L vcan0 >"$out/vcan0-remade.log" &
+dump0=$!
+sleep 0.3
+cansend vcan0 101#04
+cansend vcan1 111#05
+sleep 0.5
+kill $dump0; wait $dump0 2>/dev/null
+check "after vcan0 was removed and made again, its frames reach the network" \
+  test "$(grep -c ' 101#04' "$out/vcan1.log")" -eq 1
+check "and frames from the network reach it" test "$(grep -c ' 111#05' "$out/vcan0-remade.log")" -eq 1
 
 # 2. The peer goes away: bridge A keeps running and counts failed sends; the peer returns and traffic resumes.
 kill -TERM $bridge_b; wait $bridge_b

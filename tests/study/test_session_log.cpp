@@ -212,6 +212,20 @@ TEST_CASE("log: the runner's fields of a record survive the round trip", "[unit]
   CHECK(back.intervals[0].confirmed.is_null());
 }
 
+TEST_CASE("log: a session on a simulated pair names it in its header, other headers read as they always did",
+          "[unit][study]") {
+  study::SessionHeader h{"3ifc", "hil01", 3, true, study::to_json(study::ThreeIfcConfig{}), nullptr};
+  const std::string plain = study::to_json(h).dump();
+  CHECK(plain.find("simulator") == std::string::npos);
+  CHECK(study::header_from_json(nlohmann::json::parse(plain)).simulator.is_null());
+  h.simulator = {{"topology", "one-controller"}, {"gauge_chain", "paper-adc"}, {"seed", 3}};
+  const auto back = study::header_from_json(nlohmann::json::parse(study::to_json(h).dump()));
+  CHECK(back.simulator == h.simulator);
+  auto bad = nlohmann::json::parse(plain);
+  bad["simulator"] = "lever-hil";
+  CHECK_THROWS_AS(study::header_from_json(bad), study::SessionLogError);
+}
+
 TEST_CASE("log: the header's config makes the same procedure; a config out of range is refused", "[unit][study]") {
   study::ThreeIfcConfig c;
   c.step = 0.02;

@@ -1,18 +1,17 @@
 #include "lever/app/stats_line.hpp"
 
+#include "lever/protocol/fault_names.hpp"
+
 namespace lever::app {
 
 nlohmann::json stats_json(const Snapshot& s, const BoardStats& board) {
   auto optional = [](const auto& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
   auto if_set = [](bool set, const auto& v) { return set ? nlohmann::json(v) : nlohmann::json(); };
-  nlohmann::json faults = nlohmann::json::array();
-  for (const auto f : protocol::kAllFaults)
-    if (protocol::has(s.faults, f)) faults.push_back(std::string(protocol::name(f)));
   return {
       {"role", s.role == protocol::Role::hsi ? "hsi" : "top"},
       {"pair", s.pair},
       {"state", std::string(protocol::name(s.state))},
-      {"faults", faults},
+      {"faults", protocol::fault_name_list(s.faults)},
       {"position_rad", s.position_rad},
       {"position_valid", s.position_valid},
       {"velocity_rad_s", s.velocity_rad_s},

@@ -2,20 +2,11 @@
 
 #include <fmt/format.h>
 
-#include "lever/protocol/faults.hpp"
+#include "lever/protocol/fault_names.hpp"
 
 namespace lever::study {
 
 const char* role_name(protocol::Role r) noexcept { return r == protocol::Role::hsi ? "HSI" : "TOP"; }
-
-namespace {
-std::string fault_list(protocol::FaultBits bits) {
-  std::string out;
-  for (const auto f : protocol::kAllFaults)
-    if (protocol::has(bits, f)) out += fmt::format("{}{}", out.empty() ? "" : ", ", protocol::name(f));
-  return out;
-}
-}  // namespace
 
 void PairWatch::on_frame(const protocol::CanFrame& frame, std::int64_t t_us) noexcept {
   protocol::FrameAddress address;
@@ -62,7 +53,8 @@ std::string PairWatch::not_ready(std::int64_t now_us) const {
       const auto& h = *seen.heartbeat;
       if (h.state != protocol::LeverState::armed) lever_why = fmt::format("{}", protocol::name(h.state));
       if (!h.position_valid) lever_why += lever_why.empty() ? "not homed" : ", not homed";
-      if (h.faults != 0) lever_why += fmt::format("{}faults {}", lever_why.empty() ? "" : ", ", fault_list(h.faults));
+      if (h.faults != 0)
+        lever_why += fmt::format("{}faults {}", lever_why.empty() ? "" : ", ", protocol::fault_names(h.faults, ", "));
     }
     if (!lever_why.empty()) why += fmt::format("{}{}: {}", why.empty() ? "" : "; ", role_name(role), lever_why);
   }
@@ -97,6 +89,15 @@ bool same_settings(const protocol::SettingsMessage& a, const protocol::SettingsM
 bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before,
               const protocol::SettingsMessage& wanted) noexcept {
   return seen.changes != changes_before && same_settings(seen, wanted);
+}
+
+nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us) {
+  return {{"mode", s.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+          {"p", s.p * protocol::kPLsb},
+          {"floor", s.floor * protocol::kFloorLsb},
+          {"filter_hz", s.filter_hz * protocol::kFilterHzLsb},
+          {"changes", s.changes},
+          {"at_bus_us", at_us}};
 }
 
 std::string describe(const protocol::SettingsMessage& s) {

@@ -46,9 +46,12 @@ TrialRecord record_of(const Trial& t, int attempt) {
 }
 
 nlohmann::ordered_json to_json(const SessionHeader& h) {
-  return nlohmann::ordered_json{{"record", "session"},  {"format", kLogFormat}, {"protocol", h.protocol},
-                                {"subject", h.subject}, {"seed", h.seed},       {"simulated", h.simulated},
-                                {"config", h.config}};
+  auto j = nlohmann::ordered_json{{"record", "session"},  {"format", kLogFormat}, {"protocol", h.protocol},
+                                  {"subject", h.subject}, {"seed", h.seed},       {"simulated", h.simulated},
+                                  {"config", h.config}};
+  // Only when there is one, so the logs of pairs and of simulate-session read as they always did.
+  if (!h.simulator.is_null()) j["simulator"] = h.simulator;
+  return j;
 }
 
 nlohmann::ordered_json to_json(const TrialRecord& r) {
@@ -90,6 +93,9 @@ SessionHeader header_from_json(const nlohmann::json& j) {
     h.seed = j.at("seed").get<std::uint64_t>();
     h.simulated = j.value("simulated", false);
     h.config = j.value("config", nlohmann::json::object());
+    h.simulator = j.value("simulator", nlohmann::json(nullptr));
+    if (!h.simulator.is_null() && !h.simulator.is_object())
+      throw SessionLogError("the session header's simulator is not an object");
   } catch (const nlohmann::json::exception& e) {
     throw SessionLogError(fmt::format("the session header: {}", e.what()));
   }

@@ -1,6 +1,6 @@
 #pragma once
-// A raw SocketCAN socket on one interface, non-blocking, for classic CAN frames: kernel receive filters, error
-// frames on request, and the interface's state. Shared by lever-bridge and the board's CAN port
+// A raw SocketCAN socket on one interface, non-blocking unless asked, for classic CAN frames: kernel receive
+// filters, error frames on request, and the interface's state. Shared by lever-bridge and the board's CAN port
 // (board_can_port.hpp). No exceptions; after open(), no call allocates.
 #include <array>
 #include <cstddef>
@@ -50,6 +50,9 @@ struct SocketCanConfig {
   std::vector<CanFilter> filters;   // none: every frame
   std::uint32_t error_classes = 0;  // CAN_ERR_* classes to receive as error frames (CAN_RAW_ERR_FILTER); 0: none
   bool timestamps = true;           // the kernel's receive time on every frame (SO_TIMESTAMP)
+  // A socket whose reads block (for a thread that waits in recvmmsg on it); write() never blocks either way
+  // (MSG_DONTWAIT). Kept across reopen().
+  bool blocking = false;
 };
 
 class SocketCan {
@@ -78,7 +81,8 @@ class SocketCan {
   // interface took the name after ours was removed: the socket is bound to the old one.
   LinkState link_state() const noexcept;
   // A fresh socket with the same options on the interface that has our name now, replacing this one on
-  // success; on failure the old socket stays and last_errno() says why. No allocation.
+  // success under the same descriptor number (dup3), so that a thread blocked on fd() or holding it goes on
+  // with a valid descriptor; on failure the old socket stays and last_errno() says why. No allocation.
   bool reopen() noexcept;
   // link_state(), after a reopen() when the interface was gone and one of our name is there again: what a
   // user whose interface went down or away calls now and then until it says up.
@@ -103,6 +107,7 @@ class SocketCan {
   std::size_t filter_count_ = 0;
   std::uint32_t error_classes_ = 0;
   bool timestamps_ = true;
+  bool blocking_ = false;
   int ifindex_ = 0;
   bool unbound_ = false;  // the kernel reported the interface removed
   int errno_ = 0;

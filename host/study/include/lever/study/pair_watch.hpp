@@ -4,6 +4,7 @@
 // bus and no clock of its own, so the rules that hold an interval back or void it are unit-tested.
 #include <array>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
@@ -66,6 +67,8 @@ bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before
               const protocol::SettingsMessage& wanted) noexcept;
 // The same settings (the counters aside): what an interval's settings frames must go on showing.
 bool same_settings(const protocol::SettingsMessage& a, const protocol::SettingsMessage& b) noexcept;
+// What a lever's settings frame showed, received at `at_us`, as an interval's `confirmed` holds it in the log.
+nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us);
 // "p 5.00 %, floor 0.010, prefilter off, deadband": for the experimenter and the log, never the subject.
 std::string describe(const protocol::SettingsMessage& s);
 

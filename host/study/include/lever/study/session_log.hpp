@@ -25,6 +25,9 @@ struct SessionHeader {
   std::uint64_t seed = 0;
   bool simulated = false;
   nlohmann::json config = nlohmann::json::object();
+  // A session run on a simulated pair (lever-hil study): the simulation's setup, its seed and its clock, which the
+  // bus times are on. Null for a session on a pair and for one without any pair (lever-study simulate-session).
+  nlohmann::json simulator = nullptr;
 };
 
 // An interval as presented; the runner fills the fields the procedure cannot know.
