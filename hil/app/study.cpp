@@ -92,6 +92,7 @@ SimConfig hil_config(const StudyOptions& o) {
   c.scenario = ScenarioKind::wall_tap;
   c.seed = o.seed;
   c.topology = o.topology;
+  c.gauge_chain = o.gauge_chain;
   set_hsi_force_loop(c, o.hsi_force_loop);
   // The levers start as the paper's plain intervals run: the deadband at p = 0 on both paths. Every interval asks
   // for its own p; the mode, floor and prefilter stay these (lever-study's runner keeps the pair's own).
@@ -327,7 +328,14 @@ void add_study_options(CLI::App& cmd, StudyOptions& o) {
   cmd.add_option("--topology", o.topology, "one-controller (the paper's PC), one-site or two-sites")
       ->transform(program::one_of(kTopologies))
       ->default_str("one-controller");
-  cmd.add_option("--hsi-force-loop", o.hsi_force_loop, "the HSI's force loop on its own gauge (the paper's): on or off")
+  cmd.add_option("--gauge-chain", o.gauge_chain,
+                 "the strain-gauge chain: dad141 (Fig. 8's setup), paper-adc (an assumed chain for the paper's PC) or "
+                 "topology (the topology's own)")
+      ->transform(program::one_of(kGaugeChains))
+      ->default_str("dad141");
+  cmd.add_option("--hsi-force-loop", o.hsi_force_loop,
+                 "the HSI's force loop on its own gauge: on or off (refused on paper-adc, where it makes the contact "
+                 "chatter)")
       ->transform(program::one_of(kOnOff))
       ->default_str("on");
   cmd.add_option("--confirm-timeout", o.confirm_timeout_s,

@@ -22,8 +22,11 @@ struct StudyOptions {
   study::ThreeIfcConfig three_ifc;
   study::RatingConfig rating;
   double threshold = 0.12, slope = 3.0, lapse = 0.02;  // the 3IFC observer (Weibull), as lever-study's
-  Topology topology = Topology::one_controller;        // the paper's setup: both levers in one PC
-  bool hsi_force_loop = true;                          // the paper's force control loop on the HSI's gauge
+  // Fig. 8's setup, the one the contact check passes in one controller (docs/hil-model.md, "The contact check"):
+  // both levers in one PC, the DAD 141.1 chain, the HSI's force loop on its gauge.
+  Topology topology = Topology::one_controller;
+  GaugeChain gauge_chain = GaugeChain::dad141;
+  bool hsi_force_loop = true;
   double confirm_timeout_s = 1.0;
   std::vector<const CLI::Option*> three_ifc_only;  // refused with --protocol rating, which would ignore them
 };

@@ -4,7 +4,15 @@
 
 namespace lever::hil {
 
-HostedRig::HostedRig(const SimConfig& config) : config_(config), rig_(std::make_unique<SimRig>(config_)) {}
+namespace {
+// The same setups as run_simulation, refused before any lever is made.
+const SimConfig& offered(const SimConfig& config) {
+  check_offered(config);
+  return config;
+}
+}  // namespace
+
+HostedRig::HostedRig(const SimConfig& config) : config_(offered(config)), rig_(std::make_unique<SimRig>(config_)) {}
 HostedRig::~HostedRig() = default;
 
 void HostedRig::power_up() { tick_ = rig_->power_up(); }

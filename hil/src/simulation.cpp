@@ -26,6 +26,15 @@ void set_hsi_force_loop(SimConfig& config, bool on) {
 
 bool hsi_force_loop_offered(const SimConfig& config) { return !reads_paper_gauge(config); }
 
+void check_offered(const SimConfig& config) {
+  if (config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor &&
+      !hsi_force_loop_offered(config))
+    throw std::invalid_argument(
+        "--hsi-force-loop on makes the contact chatter on the paper's gauge chain and is left out there "
+        "(docs/hil-model.md, "
+        "\"The contact check\"): use --gauge-chain dad141 or the loop off");
+}
+
 int nominal_one_way_delay_ticks(const SimConfig& config) {
   if (config.topology == Topology::one_controller) return 0;  // handed over within the tick
   const double frame_ns = protocol::frame_bits_worst_case(8) * 1e9 / config.bitrate;
@@ -37,12 +46,7 @@ int nominal_one_way_delay_ticks(const SimConfig& config) {
 
 SimResult run_simulation(const SimConfig& config) {
   const auto wall_start = std::chrono::steady_clock::now();
-  if (config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor &&
-      !hsi_force_loop_offered(config))
-    throw std::invalid_argument(
-        "--hsi-force-loop on makes the contact chatter on the paper's gauge chain and is left out there "
-        "(docs/hil-model.md, "
-        "\"The contact check\"): use --gauge-chain dad141 or the loop off");
+  check_offered(config);
   SimRig rig(config);
   SimResult result;
   const fw::Tick start = rig.power_up();

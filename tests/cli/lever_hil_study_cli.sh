@@ -22,7 +22,7 @@ expect_bad() {  # expect_bad NAME EXPECTED_STDERR_SUBSTRING ARGS...
 check "lever-hil --help lists study" grep -q "^  study " "$work/help"
 "$hil" study --help >"$work/study-help"; code=$?
 check "study --help: exit 0 (got $code)" test "$code" -eq 0
-for option in --log --interval-s --seed --topology --threshold; do
+for option in --log --interval-s --seed --topology --gauge-chain --threshold; do
   check "study --help lists $option" grep -qe "$option" "$work/study-help"
 done
 
@@ -32,7 +32,7 @@ short=(--interval-s 2 --gap-s 0.5 --start-p 0.15 --right-in-a-row 2 --threshold 
 "$hil" study --log "$work/s.jsonl" --subject hil01 --seed 3 "${short[@]}" >"$work/out" 2>"$work/err"; code=$?
 check "study: exit 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0
 check "study: says SIMULATED and names the HIL's setup ($(cat "$work/out"))" \
-  grep -q "SIMULATED session of hil01 (3ifc) on the HIL's pair (one-controller, paper-adc gauge, seed 3)" "$work/out"
+  grep -q "SIMULATED session of hil01 (3ifc) on the HIL's pair (one-controller, dad141 gauge, seed 3)" "$work/out"
 
 # The log: the header names the simulated pair and its clock; every interval of every answered trial has bus times,
 # frame counts, and both levers' confirmations showing the interval's p (read from their settings frames).
@@ -42,7 +42,7 @@ lines = [json.loads(l) for l in open(sys.argv[1])]
 h = lines[0]
 assert h["simulated"] is True, h
 sim = h["simulator"]
-assert sim["topology"] == "one-controller" and sim["gauge_chain"] == "paper-adc" and sim["seed"] == 3, sim
+assert sim["topology"] == "one-controller" and sim["gauge_chain"] == "dad141" and sim["seed"] == 3, sim
 assert "HIL's clock" in sim["clock"], sim
 assert h["config"]["interval_s"] == 2, h["config"]
 trials = [r for r in lines[1:] if r["kind"] == "3ifc"]
@@ -50,8 +50,11 @@ assert len(trials) == 6, len(trials)
 for r in trials:
     assert r["void"] is None and r["answer"] == r["carrier"], r
     for i in r["intervals"]:
+        # The bus's clock is its newest frame's time (as the kernel's receive times): an interval ends at the first
+        # frame 2 s or more after its start, and the longest the bus is silent is a heartbeat period (25 ms, each
+        # lever sends one whatever its deadband holds back).
         length = i["end_bus_us"] - i["start_bus_us"]
-        assert 2_000_000 <= length <= 2_001_000, length
+        assert 2_000_000 <= length <= 2_025_000, length
         assert i["frames_velocity"] > 0 and i["frames_force"] > 0, i
         c = i["confirmed"]
         assert abs(c["hsi"]["p"] - i["p_velocity"]) < 1e-4 and abs(c["top"]["p"] - i["p_force"]) < 1e-4, i
@@ -96,7 +99,7 @@ check "report: force traffic at p >= 10 % below the plain intervals' ($(tr '\n' 
 check "report: velocity traffic at p >= 10 % not above the plain intervals'" traffic_check velocity not-above
 "$study" report "$work/s.jsonl" >"$work/report"
 check "report: the session is labelled simulated, on the simulated pair" \
-  grep -q "run on a simulated pair (lever-hil study: topology one-controller, gauge chain paper-adc, seed 3)" \
+  grep -q "run on a simulated pair (lever-hil study: topology one-controller, gauge chain dad141, seed 3)" \
   "$work/report"
 
 cp "$work/s.jsonl" "$work/s.before"
@@ -135,6 +138,9 @@ expect_bad "--protocol" "--protocol" --log "$work/x.jsonl" --protocol staircase
 expect_bad "--start-p above --max-p" "start_p" --log "$work/x.jsonl" --start-p 0.3 --max-p 0.25
 expect_bad "a staircase option with --protocol rating" "--start-p belongs to --protocol 3ifc" \
   --log "$work/x.jsonl" --protocol rating --start-p 0.1
+expect_bad "--gauge-chain" "--gauge-chain must be one of" --log "$work/x.jsonl" --gauge-chain ad620
+expect_bad "the force loop on the paper's chain" "makes the contact chatter on the paper's gauge chain" \
+  --log "$work/x.jsonl" --gauge-chain paper-adc --hsi-force-loop on
 expect_bad "--log -" "--log must name a file" --log -
 expect_bad "--log in a missing directory" "does not exist" --log "$work/no/such/x.jsonl"
 check "bad input: no log left behind" test ! -e "$work/x.jsonl"

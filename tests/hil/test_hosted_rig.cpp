@@ -4,9 +4,11 @@
 #include <catch2/catch.hpp>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "lever/hil/hosted_rig.hpp"
+#include "lever/hil/simulation.hpp"
 #include "lever/protocol/messages.hpp"
 
 using namespace lever;
@@ -14,11 +16,13 @@ using namespace lever::hil;
 
 namespace {
 
-SimConfig paper_setup(std::uint64_t seed) {
+// lever-hil study's default: Fig. 8's setup, the one in one controller whose contact holds.
+SimConfig fig8_setup(std::uint64_t seed) {
   SimConfig c;
   c.scenario = ScenarioKind::wall_tap;
   c.seed = seed;
   c.topology = Topology::one_controller;
+  c.gauge_chain = GaugeChain::dad141;
   set_hsi_force_loop(c, true);
   c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
   c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
@@ -70,7 +74,7 @@ protocol::CommandMessage set_velocity_p(double p) {
 
 TEST_CASE("hosted rig: the console sees both levers, and a set_deadband is shown in the lever's settings frame",
           "[unit][hil]") {
-  HostedRig rig(paper_setup(1));
+  HostedRig rig(fig8_setup(1));
   rig.power_up();
   Seen seen;
   for (int i = 0; i < 600; ++i) {
@@ -103,7 +107,7 @@ TEST_CASE("hosted rig: the console sees both levers, and a set_deadband is shown
 TEST_CASE("hosted rig: the same frames at the same ticks give the same frames back, another seed other frames",
           "[unit][hil]") {
   const auto run = [](std::uint64_t seed) {
-    HostedRig rig(paper_setup(seed));
+    HostedRig rig(fig8_setup(seed));
     rig.power_up();
     Seen seen;
     for (int i = 0; i < 2000; ++i) {
@@ -116,4 +120,14 @@ TEST_CASE("hosted rig: the same frames at the same ticks give the same frames ba
   const auto a = run(1);
   CHECK(a == run(1));
   CHECK(a != run(2));
+}
+
+TEST_CASE("hosted rig: refuses what run_simulation refuses (the force loop on the paper's gauge chain)",
+          "[hil][hosted-rig]") {
+  SimConfig c = fig8_setup(1);
+  c.gauge_chain = GaugeChain::paper_adc;
+  CHECK_THROWS_AS(HostedRig(c), std::invalid_argument);
+  CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
+  set_hsi_force_loop(c, false);
+  CHECK_NOTHROW(HostedRig(c));
 }

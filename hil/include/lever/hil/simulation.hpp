@@ -178,6 +178,9 @@ void set_hsi_force_loop(SimConfig& config, bool on);
 // Whether the HIL offers that loop on the run's gauge chain: not on the paper's, where it makes the contact chatter
 // (docs/hil-model.md, "The HSI's force control loop"); run_simulation refuses it there.
 bool hsi_force_loop_offered(const SimConfig& config);
+// Throws std::invalid_argument for a setup the HIL does not offer (today: that loop where it is not offered). Every
+// way of running the levers (run_simulation, HostedRig) asks it first.
+void check_offered(const SimConfig& config);
 
 // The ticks from a TOP's measurement to the HSI's display of it when nothing waits: a data frame's worst-case
 // time on each bus, the bridges' latency and the network's configured delay (jitter not included), rounded up
