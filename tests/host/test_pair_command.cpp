@@ -211,4 +211,3 @@ TEST_CASE("lever-ctl: a resend goes only to the targets still pending", "[ctl]")
   const auto top_only = ctl::still_pending({false, true}, pending, pending);
   CHECK((!top_only.hsi && top_only.top));
 }
-
