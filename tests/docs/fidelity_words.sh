@@ -6,7 +6,8 @@
 # direction), one named in a claim that it does not must not be. A claim of agreement is a sentence that says
 # "reproduc...", or that says "match...", "agree...", "within", "near...", "close to" or "consistent" and speaks of the
 # paper (or of Fig. 8 or Fig. 12). Headings, link targets, words in double quotes (the paper's, or a word named) and
-# sentences that point at docs/fidelity-table.md itself are not claims.
+# sentences that point at docs/fidelity-table.md itself are not claims. Every row of the table says its kind (direct,
+# derived, inferred, variant or effect; docs/hil-model.md, "Fidelity to the paper").
 # usage: fidelity_words.sh SOURCE_DIR [FILE...]   (FILE: the documents to check; default README.md docs/hil-model.md)
 set -euo pipefail
 root=$1
@@ -20,8 +21,10 @@ rows = {}
 for line in body.splitlines():
     cells = [c.strip() for c in line.strip().strip("|").split("|")]
     m = re.fullmatch(r"`([A-Za-z0-9.-]+)`", cells[0]) if cells else None
-    if m and len(cells) == 7:
-        within, direction = cells[5], cells[6]
+    if m and len(cells) == 8:
+        within, direction, kind = cells[5], cells[6], cells[7]
+        if kind not in ("direct", "derived", "inferred", "variant", "effect"):
+            sys.exit(f"{table_path}: row `{m.group(1)}` has no kind (direct, derived, inferred, variant, effect): '{kind}'")
         rows[m.group(1)] = within != "no" and direction != "no" and (within, direction) != ("-", "-")
 if len(rows) < 10:
     sys.exit(f"{table_path}: only {len(rows)} rows read")
