@@ -98,7 +98,7 @@ TEST_CASE("hosted rig: the console sees both levers, and a set_deadband is shown
     ++ticks;
   }
   // In one controller a frame takes no time on the bus: the lever takes the command at its next tick and its
-  // settings frame of that step is with the console a tick later (measured: 2 ticks).
+  // settings frame of that step is with the console a tick later.
   CHECK(ticks <= 2);
   CHECK(seen.settings[0]->p == protocol::unsigned_code(0.25, protocol::kPLsb));
   CHECK(seen.settings[1]->p == 0);  // addressed to the HSI only
