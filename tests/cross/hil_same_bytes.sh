@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The HIL means the same run on every architecture: short lever-hil scenarios (wall-tap with faults and the
 # prefilter, tdpa under delay and jitter with the predictive codec, the sphere through its driver's Butterworth,
-# Fig. 8's chain: one controller, the HSI's force loop, the adaptive window) run natively and, under qemu-user,
+# Fig. 8's chain: one controller, the DAD-141 gauge chain, the HSI's force loop, the adaptive window) run natively and, under qemu-user,
 # as built for arm64 and armhf, must give byte-identical JSON reports and per-tick traces. The reports' two
 # wall-clock fields (wall_time_s, realtime_factor) are the only ones taken out.
 # usage: hil_same_bytes.sh SOURCE_DIR NATIVE_LEVER_HIL ARCH=LEVER_HIL...
@@ -16,8 +16,8 @@ scenarios=(
   "tdpa-delay run --scenario wall-tap --duration 5 --seed 3 --mode predictive --passivity tdpa --delay-ms 25
    --jitter-ms 2 --loss 0.01"
   "sphere run --scenario sphere-3dof --duration 4 --seed 2 --p 0.05"
-  "paper-chain run --scenario wall-tap --duration 4 --seed 5 --topology one-controller --hsi-force-loop on
-   --motion-velocity adaptive-window --p 0.1"
+  "paper-chain run --scenario wall-tap --duration 4 --seed 5 --topology one-controller --gauge-chain dad141
+   --hsi-force-loop on --motion-velocity adaptive-window --p 0.1"
 )
 # One run: the report without its wall-clock fields, and the trace.
 run() {
