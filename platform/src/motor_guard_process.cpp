@@ -112,6 +112,14 @@ int run_motor_guard(const char* spec_text) {
     return 1;
   }
   std::string notes;
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer's shadow is terabytes of reserved address space, which mlockall would try to fault in.
+  notes += ", memory not locked (AddressSanitizer build)";
+#else
+  if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) notes += std::string(", warning: mlockall: ") + std::strerror(errno);
+#endif
+  // Memory is locked before the priority is raised: mlockall faults in everything the lever mapped before the
+  // fork, and at the guard's priority that would take the CPU from any loop on the board.
   if (s.priority > 0) {
     sched_param param{};
     param.sched_priority = static_cast<int>(s.priority);
@@ -120,12 +128,6 @@ int run_motor_guard(const char* spec_text) {
                std::strerror(errno) + "): a loop spinning at its priority could starve it";
     }
   }
-#if defined(__SANITIZE_ADDRESS__)
-  // AddressSanitizer's shadow is terabytes of reserved address space, which mlockall would try to fault in.
-  notes += ", memory not locked (AddressSanitizer build)";
-#else
-  if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) notes += std::string(", warning: mlockall: ") + std::strerror(errno);
-#endif
   void* page =
       ::mmap(nullptr, sizeof(MotorGuardShared), PROT_READ | PROT_WRITE, MAP_SHARED, static_cast<int>(s.shared), 0);
   if (page == MAP_FAILED) {

@@ -81,6 +81,34 @@ Result<RealtimeLoop> RealtimeLoop::open(const RealtimeConfig& config) {
     loop.grants_.cpus = config.cpus;
   }
 
+  if (config.lock_memory) {
+    if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+      loop.unlock_memory_ = true;
+      loop.grants_.memory_locked = true;
+    } else {
+      const int err = errno;
+      rlimit memlock{};
+      ::getrlimit(RLIMIT_MEMLOCK, &memlock);
+      append(loop.warning_, std::string("mlockall refused (") + std::strerror(err) +
+                                "; needs CAP_IPC_LOCK or an RLIMIT_MEMLOCK above the process's size, which is " +
+                                limit_text(memlock.rlim_cur) + " bytes), so page faults may stall a step");
+    }
+  }
+
+  if (config.prefault_stack_bytes > 0) {
+    const std::size_t room = stack_room();
+    const std::size_t usable = room > kStackReserve ? room - kStackReserve : 0;
+    const std::size_t bytes = std::min(config.prefault_stack_bytes, usable);
+    prefault_stack(bytes);
+    loop.grants_.stack_prefaulted_bytes = bytes;
+    if (bytes < config.prefault_stack_bytes) {
+      append(loop.warning_, "stack pre-faulted over " + std::to_string(bytes) + " of the " +
+                                std::to_string(config.prefault_stack_bytes) + " bytes asked (the thread's stack has " +
+                                std::to_string(room) + " left)");
+    }
+  }
+  // Raised last: locking memory faults in every page the process maps (its threads' stacks too), which at the
+  // loop's priority would take the CPU from another lever's loop at the same priority on a one-core board.
   if (config.fifo_priority > 0) {
     sched_param saved{};
     loop.saved_policy_ = ::sched_getscheduler(loop.thread_);
@@ -112,32 +140,6 @@ Result<RealtimeLoop> RealtimeLoop::open(const RealtimeConfig& config) {
     loop.grants_.fifo_priority = granted;
   }
 
-  if (config.lock_memory) {
-    if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
-      loop.unlock_memory_ = true;
-      loop.grants_.memory_locked = true;
-    } else {
-      const int err = errno;
-      rlimit memlock{};
-      ::getrlimit(RLIMIT_MEMLOCK, &memlock);
-      append(loop.warning_, std::string("mlockall refused (") + std::strerror(err) +
-                                "; needs CAP_IPC_LOCK or an RLIMIT_MEMLOCK above the process's size, which is " +
-                                limit_text(memlock.rlim_cur) + " bytes), so page faults may stall a step");
-    }
-  }
-
-  if (config.prefault_stack_bytes > 0) {
-    const std::size_t room = stack_room();
-    const std::size_t usable = room > kStackReserve ? room - kStackReserve : 0;
-    const std::size_t bytes = std::min(config.prefault_stack_bytes, usable);
-    prefault_stack(bytes);
-    loop.grants_.stack_prefaulted_bytes = bytes;
-    if (bytes < config.prefault_stack_bytes) {
-      append(loop.warning_, "stack pre-faulted over " + std::to_string(bytes) + " of the " +
-                                std::to_string(config.prefault_stack_bytes) + " bytes asked (the thread's stack has " +
-                                std::to_string(room) + " left)");
-    }
-  }
   if (!loop.warning_.empty()) loop.warning_ = "real-time loop: " + loop.warning_;
   return loop;
 }

@@ -53,6 +53,7 @@ start_fw hsi
 start_fw top
 require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
 require "(TOP too)" wait_for 60 top '.state == "disarmed"'
+check "and neither lever's motor guard fired while both started" no_guard_fired hsi top
 command vcan0 6
 require "home, sent at the HSI's site: the HSI homes" wait_for 120 hsi '.position_valid'
 require "and over the link, the TOP homes" wait_for 120 top '.position_valid'
@@ -65,6 +66,8 @@ r() { jq -r "$1" "$out/two-sites.report"; }
 check "both stayed armed through the scenario (armed $(r .armed_s) s)" test "$(r '.armed_s >= 14.5')" = true
 check "the TOP holds the HSI's position across the link: rms error $(r .position_rmse) rad < 0.025" \
   test "$(r '.position_rmse < 0.025')" = true
+check "the HSI kept its loop's time from its start on" timing_kept hsi
+check "(TOP too)" timing_kept top
 
 systemctl stop lever-bridge@site-a lever-bridge@site-b
 for site in site-a site-b; do

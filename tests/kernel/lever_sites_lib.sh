@@ -201,11 +201,19 @@ wait_for() {
   return 1
 }
 
+# no_guard_fired ROLE...: no motor guard of these levers has fired. A lever starting beside another on one CPU
+# must not stall the running loop past its guard's deadline (docs/deploy.md, "The board's kernel").
+no_guard_fired() {
+  local role
+  for role; do ! has_text "$out/$role.err" "loop has not stepped for" || return 1; done
+}
+
 # up_and_homed: both levers up disarmed, then homed by lever-ctl home (the checks every pair test starts with;
 # arming is each test's own)
 up_and_homed() {
   require "both levers come up disarmed" wait_for 60 hsi '.state == "disarmed"'
   require "(TOP too)" wait_for 60 top '.state == "disarmed"'
+  check "and neither lever's motor guard fired while both started" no_guard_fired hsi top
   require "lever-ctl home: both levers' heartbeats say homed" lever_ctl vcan0 home
   require "both home (status lines)" wait_for 120 hsi '.position_valid'
   require "(TOP too)" wait_for 120 top '.position_valid'
