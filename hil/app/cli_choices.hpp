@@ -34,7 +34,6 @@ inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
 inline const program::Choices<fw::PassivityMode> kPassivity{
     {"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}};
-inline const program::Choices<codec::Mode> kModes{{"deadband", codec::Mode::deadband},
-                                                  {"predictive", codec::Mode::predictive}};
+inline const program::Choices<codec::Mode> kModes = program::choices_of(codec::kAllModes, codec::name);
 
 }  // namespace lever::hil

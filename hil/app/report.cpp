@@ -5,14 +5,11 @@
 #include "lever/protocol/fault_names.hpp"
 
 namespace lever::hil {
-namespace {
-
 nlohmann::json codec_json(const codec::Config<double>& c) {
-  return {{"mode", c.mode == codec::Mode::predictive ? "predictive" : "deadband"},
-          {"p", c.p},
-          {"floor", c.floor},
-          {"filter_hz", c.filter_hz}};
+  return {{"mode", std::string(codec::name(c.mode))}, {"p", c.p}, {"floor", c.floor}, {"filter_hz", c.filter_hz}};
 }
+
+namespace {
 
 nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); }
 
@@ -196,10 +193,8 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
 
 void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
   fmt::print(out, "{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n",
-             scenario_name(c.scenario), c.duration_s, c.seed,
-             c.velocity_codec.mode == codec::Mode::predictive ? "predictive" : "deadband", c.velocity_codec.p,
-             c.velocity_codec.floor, c.force_codec.mode == codec::Mode::predictive ? "predictive" : "deadband",
-             c.force_codec.p, c.force_codec.floor);
+             scenario_name(c.scenario), c.duration_s, c.seed, codec::name(c.velocity_codec.mode), c.velocity_codec.p,
+             c.velocity_codec.floor, codec::name(c.force_codec.mode), c.force_codec.p, c.force_codec.floor);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
   fmt::print(out,

@@ -8,6 +8,8 @@
 namespace lever::hil {
 
 nlohmann::json report_json(const SimConfig& config, const SimResult& result);
+// One direction's codec settings as every report of lever-hil writes them (run, sweep, sphere).
+nlohmann::json codec_json(const codec::Config<double>& c);
 // The same for a person: a few lines.
 void print_report(std::FILE* out, const SimConfig& config, const SimResult& result);
 std::string scenario_name(ScenarioKind kind);

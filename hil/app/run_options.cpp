@@ -64,7 +64,7 @@ void add_scenario_options(CLI::App& cmd, RunOptions& o) {
 void add_codec_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--mode", o.mode, "deadband or predictive, both directions")
       ->transform(program::one_of(kModes))
-      ->default_str("deadband");
+      ->default_str(std::string(codec::name(codec::Mode::deadband)));
   cmd.add_option("--mode-velocity", o.mode_velocity, "mode for HSI->TOP velocity (overrides --mode)")
       ->transform(program::one_of(kModes));
   cmd.add_option("--mode-force", o.mode_force, "mode for TOP->HSI force (overrides --mode)")

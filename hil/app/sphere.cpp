@@ -10,15 +10,10 @@
 
 #include "lever/program/output_file.hpp"
 #include "lever/program/text.hpp"
+#include "report.hpp"
 
 namespace lever::hil {
 namespace {
-
-const char* mode_name(codec::Mode m) { return m == codec::Mode::predictive ? "predictive" : "deadband"; }
-
-nlohmann::json codec_json(const codec::Config<double>& c) {
-  return {{"mode", mode_name(c.mode)}, {"p", c.p}, {"floor", c.floor}, {"filter_hz", c.filter_hz}};
-}
 
 constexpr const char* kTraceHeader =
     "t,x,y,z,measured_x,measured_y,measured_z,velocity_x,velocity_y,velocity_z,velocity_sent,"
@@ -138,8 +133,8 @@ int run_sphere_command(const SphereConfig& config, bool json, const std::string&
     return 0;
   }
   fmt::print(out, "sphere-3dof for {} s (seed {}), velocity {} p={} filter={} Hz, force {} p={} filter={} Hz\n",
-             c.duration_s, c.seed, mode_name(c.velocity_codec.mode), c.velocity_codec.p, c.velocity_codec.filter_hz,
-             mode_name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
+             c.duration_s, c.seed, codec::name(c.velocity_codec.mode), c.velocity_codec.p, c.velocity_codec.filter_hz,
+             codec::name(c.force_codec.mode), c.force_codec.p, c.force_codec.filter_hz);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
   fmt::print(out, "    in contact / in free space: velocity {:.1f} % / {:.1f} %, force {:.1f} % / {:.1f} %\n",

@@ -50,10 +50,10 @@ int main(int argc, char** argv) {
 
   lever::codec::Config<double> config;
   std::string input, output;
-  const program::Choices<Mode> modes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+  const auto modes = program::choices_of(lever::codec::kAllModes, lever::codec::name);
   app.add_option("--mode", config.mode, "deadband (zero-order hold) or predictive (linear predictor)")
       ->transform(program::one_of(modes))
-      ->default_str("deadband");
+      ->default_str(std::string(lever::codec::name(lever::codec::Mode::deadband)));
   app.add_option("--p", config.p, "Weber fraction p: relative deadband, e.g. 0.1 for 10 %")
       ->check(program::number(program::kWeberFraction))
       ->default_str("0.1");
@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
         {"rmse", run.rmse},
         {"max_error", run.max_error},
         {"dof", trace.dof},
-        {"mode", config.mode == Mode::predictive ? "predictive" : "deadband"},
+        {"mode", std::string(lever::codec::name(config.mode))},
         {"p", config.p},
         {"floor", config.floor},
         {"filter_hz", config.filter_hz},

@@ -294,14 +294,13 @@ int main(int argc, char** argv) {
   CLI::App* deadband = subs[5];
   const program::Choices<protocol::Direction> directions{{"motion", protocol::Direction::motion},
                                                          {"force", protocol::Direction::force}};
-  const program::Choices<lever::codec::Mode> modes{{"deadband", lever::codec::Mode::deadband},
-                                                   {"predictive", lever::codec::Mode::predictive}};
+  const auto modes = program::choices_of(lever::codec::kAllModes, lever::codec::name);
   deadband->add_option("--direction", o.direction, "motion (HSI to TOP) or force (TOP to HSI)")
       ->required()
       ->transform(program::one_of(directions));
   deadband->add_option("--mode", o.mode, "deadband (zero-order hold) or predictive (linear predictor)")
       ->transform(program::one_of(modes))
-      ->default_str("deadband");
+      ->default_str(std::string(lever::codec::name(lever::codec::Mode::deadband)));
   deadband->add_option("--p", o.p, "Weber fraction p: relative deadband, e.g. 0.1 for 10 % (sent in steps of 1e-4)")
       ->required()
       ->check(program::number(program::kWeberFraction));

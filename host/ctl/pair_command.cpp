@@ -74,9 +74,8 @@ std::string describe(const protocol::SettingsMessage& s, protocol::Role role) {
   const std::string filter =
       s.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", s.filter_hz * protocol::kFilterHzLsb);
   return fmt::format("{}: {} p {:.4f}, floor {:.3f} {}, filter {}; changes {}, tares {}{}", top ? "force" : "motion",
-                     s.mode == codec::Mode::predictive ? "predictive" : "deadband", s.p * protocol::kPLsb,
-                     s.floor * protocol::kFloorLsb, top ? "N" : "rad/s", filter, s.changes, s.tares,
-                     s.taring ? ", taring" : "");
+                     codec::name(s.mode), s.p * protocol::kPLsb, s.floor * protocol::kFloorLsb, top ? "N" : "rad/s",
+                     filter, s.changes, s.tares, s.taring ? ", taring" : "");
 }
 
 Judgement judge_settings(Verb verb, const protocol::SettingsMessage& before, const protocol::SettingsMessage& newest,

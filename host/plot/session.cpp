@@ -47,9 +47,8 @@ std::string message_name(const proto::FrameAddress& a) {
 std::string settings_text(const proto::SettingsMessage& m, bool top) {
   std::string filter = m.filter_hz == 0 ? "off" : fmt::format("{:.1f} Hz", m.filter_hz * proto::kFilterHzLsb);
   return fmt::format("{}: {} p {:.4f} floor {:.3f} {} filter {} (changes {}, tares {}{})", top ? "force" : "motion",
-                     m.mode == codec::Mode::predictive ? "predictive" : "deadband", m.p * proto::kPLsb,
-                     m.floor * proto::kFloorLsb, top ? "N" : "rad/s", filter, m.changes, m.tares,
-                     m.taring ? ", taring" : "");
+                     codec::name(m.mode), m.p * proto::kPLsb, m.floor * proto::kFloorLsb, top ? "N" : "rad/s", filter,
+                     m.changes, m.tares, m.taring ? ", taring" : "");
 }
 
 std::string num(double v) { return std::isnan(v) ? "" : fmt::format("{:.6g}", v); }

@@ -87,8 +87,7 @@ std::string settings_text(const LeverView& sender, const char* unit) {
   const auto& m = *sender.settings;
   const std::string filter =
       m.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", m.filter_hz * protocol::kFilterHzLsb);
-  return fmt::format("{} p {:.2f} % floor {:.3f} {} filter {}{}",
-                     m.mode == codec::Mode::predictive ? "predictive" : "deadband", 100.0 * m.p * protocol::kPLsb,
+  return fmt::format("{} p {:.2f} % floor {:.3f} {} filter {}{}", codec::name(m.mode), 100.0 * m.p * protocol::kPLsb,
                      m.floor * protocol::kFloorLsb, unit, filter, m.taring ? "  taring" : "");
 }
 

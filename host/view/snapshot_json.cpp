@@ -34,7 +34,7 @@ json lever(const LeverView& l) {
   out["settings_frames"] = l.settings_frames;
   if (l.settings) {
     const auto& m = *l.settings;
-    out["settings"] = {{"mode", m.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+    out["settings"] = {{"mode", std::string(codec::name(m.mode))},
                        {"p", m.p * protocol::kPLsb},
                        {"floor", m.floor * protocol::kFloorLsb},
                        {"filter_hz", m.filter_hz * protocol::kFilterHzLsb},

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 
+#include "lever/codec/config.hpp"
 #include "lever/common/rng.hpp"
 #include "lever/protocol/fault_names.hpp"
 #include "lever/protocol/messages.hpp"
@@ -302,4 +303,14 @@ TEST_CASE("fault names: every known bit by its name in table order, unknown bits
   for (const Fault f : kAllFaults) every = static_cast<FaultBits>(every | bit(f));
   CHECK(fault_name_list(every).size() == std::size(kAllFaults));
   CHECK(unknown_fault_bits(every) == 0);
+}
+
+TEST_CASE("codec modes: one spelling each, distinct, for every mode the wire can carry", "[protocol]") {
+  CHECK(lever::codec::name(lever::codec::Mode::deadband) == "deadband");
+  CHECK(lever::codec::name(lever::codec::Mode::predictive) == "predictive");
+  for (const auto a : lever::codec::kAllModes) {
+    CHECK(lever::codec::name(a) != "unknown");
+    for (const auto b : lever::codec::kAllModes)
+      if (a != b) CHECK(lever::codec::name(a) != lever::codec::name(b));
+  }
 }

@@ -15,7 +15,11 @@ constexpr int kMissedPollsTolerated = 1;
 using codec::Mode;
 using fw::Tick;
 
-const ConfigSchema::Choices<Mode> kModes{{"deadband", Mode::deadband}, {"predictive", Mode::predictive}};
+const ConfigSchema::Choices<Mode> kModes = [] {
+  ConfigSchema::Choices<Mode> modes;
+  for (const Mode m : codec::kAllModes) modes.emplace_back(codec::name(m), m);
+  return modes;
+}();
 
 void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<double>& c, const std::string& unit) {
   s.choice(section + ".mode", c.mode, kModes, "reference: last value sent (deadband) or the linear predictor");

@@ -92,7 +92,7 @@ bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before
 }
 
 nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us) {
-  return {{"mode", s.mode == codec::Mode::predictive ? "predictive" : "deadband"},
+  return {{"mode", std::string(codec::name(s.mode))},
           {"p", s.p * protocol::kPLsb},
           {"floor", s.floor * protocol::kFloorLsb},
           {"filter_hz", s.filter_hz * protocol::kFilterHzLsb},
@@ -105,7 +105,7 @@ std::string describe(const protocol::SettingsMessage& s) {
                                  ? std::string("prefilter off")
                                  : fmt::format("prefilter {:.1f} Hz", s.filter_hz * protocol::kFilterHzLsb);
   return fmt::format("p {:.2f} %, floor {:.3f}, {}, {}", s.p * protocol::kPLsb * 100.0, s.floor * protocol::kFloorLsb,
-                     filter, s.mode == codec::Mode::predictive ? "predictive" : "deadband");
+                     filter, codec::name(s.mode));
 }
 
 }  // namespace lever::study

@@ -2,6 +2,7 @@
 // Parameters of the perceptual deadband codec (paper sections III-A to III-E).
 #include <cmath>
 #include <cstdint>
+#include <string_view>
 
 namespace lever::codec {
 
@@ -10,6 +11,19 @@ enum class Mode : std::uint8_t {
   deadband = 0,    // reference = last transmitted value (zero-order hold), eq. (2)/(3)
   predictive = 1,  // reference = linear extrapolation of the last two transmitted values, section III-D
 };
+
+inline constexpr Mode kAllModes[] = {Mode::deadband, Mode::predictive};
+
+// The one spelling of each mode: options, configuration files, logs, JSON and the views parse and print it.
+constexpr std::string_view name(Mode m) noexcept {
+  switch (m) {
+    case Mode::deadband:
+      return "deadband";
+    case Mode::predictive:
+      return "predictive";
+  }
+  return "unknown";
+}
 
 template <typename T>
 struct Config {

@@ -3,6 +3,7 @@
 // "wall-tap, free-motion, press-hold", and nothing else (CLI11's CheckedTransformer prints its map,
 // "{free-motion->1,...}", and cuts it at an enumerator whose value is 0 printed as a NUL byte).
 #include <CLI/CLI.hpp>
+#include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +14,15 @@ namespace lever::program {
 
 template <typename E>
 using Choices = std::vector<std::pair<std::string, E>>;
+
+// An option's choices from the enum's own table and spelling (codec::kAllModes and codec::name, say), so that the
+// names are written once, next to the type.
+template <typename E, std::size_t N, typename NameOf>
+Choices<E> choices_of(const E (&all)[N], NameOf name_of) {
+  Choices<E> choices;
+  for (const E e : all) choices.emplace_back(std::string(name_of(e)), e);
+  return choices;
+}
 
 template <typename E>
 std::string choice_names(const Choices<E>& choices) {
