@@ -30,7 +30,7 @@ void check_offered(const SimConfig& config) {
   if (config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor &&
       !hsi_force_loop_offered(config))
     throw std::invalid_argument(
-        "--hsi-force-loop on makes the contact chatter on the paper's gauge chain and is left out there "
+        "--hsi-force-loop on makes the contact chatter on the assumed AD620 chain and is left out there "
         "(docs/hil-model.md, "
         "\"The contact check\"): use --gauge-chain dad141 or the loop off");
 }

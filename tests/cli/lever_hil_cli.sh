@@ -34,7 +34,7 @@ expect_bad "gauge chain unknown" "--gauge-chain" run --gauge-chain bogus
 expect_bad "the DAD's settings on the paper's ADC chain" "--gauge-chain dad141" run --topology one-controller \
   --gauge-noise-n 0.01
 expect_bad "the HSI's force loop on the paper's chain, where it makes the contact chatter" \
-  "makes the contact chatter on the paper's gauge chain" run --topology one-controller --hsi-force-loop on
+  "makes the contact chatter on the assumed AD620 chain" run --topology one-controller --hsi-force-loop on
 expect_bad "a gauge chain for the sphere" "--gauge-chain belongs to the lever scenarios" run --scenario sphere-3dof \
   --gauge-chain paper-adc
 expect_bad "the sphere's position sensor for a lever" "--position-sensor belongs to sphere-3dof" run \

@@ -139,7 +139,7 @@ expect_bad "--start-p above --max-p" "start_p" --log "$work/x.jsonl" --start-p 0
 expect_bad "a staircase option with --protocol rating" "--start-p belongs to --protocol 3ifc" \
   --log "$work/x.jsonl" --protocol rating --start-p 0.1
 expect_bad "--gauge-chain" "--gauge-chain must be one of" --log "$work/x.jsonl" --gauge-chain ad620
-expect_bad "the force loop on the paper's chain" "makes the contact chatter on the paper's gauge chain" \
+expect_bad "the force loop on the paper's chain" "makes the contact chatter on the assumed AD620 chain" \
   --log "$work/x.jsonl" --gauge-chain paper-adc --hsi-force-loop on
 expect_bad "--log -" "--log must name a file" --log -
 expect_bad "--log in a missing directory" "does not exist" --log "$work/no/such/x.jsonl"

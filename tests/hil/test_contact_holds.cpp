@@ -14,7 +14,7 @@
 using namespace lever;
 using namespace lever::hil;
 
-// Expected to fail: with its derived damping the paper's gauge chain still chatters open loop, and the DAD 141.1 (at
+// Expected to fail: with its derived damping the assumed AD620 chain still chatters open loop, and the DAD 141.1 (at
 // 0.6, its derived 0.4 not applied) chatters open loop in every run and with its force loop on seed 1 of the sites
 // (docs/hil-model.md, "Re-derived on each gauge chain").
 TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-loop setting",

@@ -122,7 +122,7 @@ TEST_CASE("hosted rig: the same frames at the same ticks give the same frames ba
   CHECK(a != run(2));
 }
 
-TEST_CASE("hosted rig: refuses what run_simulation refuses (the force loop on the paper's gauge chain)",
+TEST_CASE("hosted rig: refuses what run_simulation refuses (the force loop on the assumed AD620 chain)",
           "[hil][hosted-rig]") {
   SimConfig c = fig8_setup(1);
   c.gauge_chain = GaugeChain::paper_adc;

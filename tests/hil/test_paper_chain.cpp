@@ -54,7 +54,7 @@ TEST_CASE("the HSI's force loop closes on its own gauge, the received force its 
     c.duration_s = 8.0;
     c.topology = Topology::one_controller;
     // The loop's gains are the firmware's, set on the deployment's filtered amplifier; on the paper's unfiltered ADC
-    // chain it does not track (docs/hil-model.md, "The paper's gauge chain").
+    // chain it does not track (docs/hil-model.md, "The assumed AD620 chain").
     c.gauge_chain = GaugeChain::dad141;
     set_hsi_force_loop(c, on);
     int pressing = 0, read_gauge = 0;

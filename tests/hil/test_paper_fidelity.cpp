@@ -55,7 +55,7 @@ const char* name(Kind k) {
 }
 
 // The paper's wall-tap on the lever in the paper's setup (docs/hil-model.md, "The paper's chain, choice by choice"):
-// both levers in one controller (and so the paper's gauge chain), the HSI's force loop on, its deadband rule on both
+// both levers in one controller (and so the assumed AD620 chain), the HSI's force loop on, its deadband rule on both
 // directions, no floor, no prefilter; counted as the paper counts, the packets the deadband sends; 20 s per seed.
 SimConfig lever_setup(double p, std::uint64_t seed) {
   SimConfig c;
@@ -63,7 +63,7 @@ SimConfig lever_setup(double p, std::uint64_t seed) {
   c.duration_s = 20.0;
   c.seed = seed;
   c.topology = Topology::one_controller;
-  // The one setup in one controller whose contact holds (docs/hil-model.md, "The contact check"): the paper's gauge
+  // The one setup in one controller whose contact holds (docs/hil-model.md, "The contact check"): the assumed AD620
   // chain chatters with the loop and without it.
   c.gauge_chain = GaugeChain::dad141;
   set_hsi_force_loop(c, true);
@@ -176,8 +176,8 @@ class Table {
          "the paper's setup; effect, a change from one rate to another, its direction counted only if every seed's "
          "change has the paper's sign (its size is the means' change).\n\nThe lever's rows (F8) are measured in one "
          "controller on the DAD 141.1 gauge chain with the HSI's force "
-         "loop on, the one setup in the paper's topology that passes the contact check at p = 0; the paper's gauge "
-         "chain (an assumed AD620 and 16-bit ADC) chatters there with the loop and without it.\n";
+         "loop on, the one setup in the paper's topology that passes the contact check at p = 0; the assumed AD620 "
+         "chain (an AD620 and a 16-bit ADC, `paper-adc`) chatters there with the loop and without it.\n";
     return o.str();
   }
 

@@ -212,7 +212,7 @@ TEST_CASE("the simulation refuses an amplifier it cannot model", "[hil][gauge]")
   CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
 }
 
-TEST_CASE("the paper's gauge chain: an AD620 and a 16-bit ADC read once a tick, as docs/hil-model.md derives it",
+TEST_CASE("the assumed AD620 chain: an AD620 and a 16-bit ADC read once a tick, as docs/hil-model.md derives it",
           "[hil][gauge]") {
   const StrainGaugeParams p = paper_adc_gauge();
   // 16 bits over +-10 V behind a gain of 495 on a 0.4 mV/N bridge; 9.3 nV/rtHz over pi/2 x 24 kHz.

@@ -15,6 +15,7 @@
 #include "lever/fw/lever.hpp"
 #include "lever/platform/board_can_port.hpp"
 #include "lever/platform/gpio_encoder.hpp"
+#include "lever/platform/kernel_preemption.hpp"
 #include "lever/platform/latest_value.hpp"
 #include "lever/platform/loop_watchdog.hpp"
 #include "lever/platform/modbus_gauge.hpp"
@@ -110,6 +111,19 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
     }
   });
 
+  if (config.board.realtime_priority > 0) {
+    const auto preemption = platform::preemption_of(platform::read_kernel_preemption_sources());
+    if (preemption == platform::Preemption::voluntary) {
+      fmt::print(stderr,
+                 "lever-fw: warning: the kernel runs the voluntary preemption model: an ordinary process inside a "
+                 "system call can hold this loop for milliseconds whatever its priority; boot with preempt=full or "
+                 "a PREEMPT_RT kernel (docs/deploy.md, \"The board's kernel\")\n");
+    } else if (preemption == platform::Preemption::unknown) {
+      fmt::print(stderr,
+                 "lever-fw: note: the kernel's preemption model is not known (PREEMPT_DYNAMIC, no preempt= on its "
+                 "command line, no readable /boot/config); the loop needs preempt=full (docs/deploy.md)\n");
+    }
+  }
   auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
   if (!loop_result) {
     fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);

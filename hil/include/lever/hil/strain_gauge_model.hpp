@@ -36,7 +36,7 @@ struct StrainGaugeParams {
   }
 };
 
-// The paper's chain (docs/hil-model.md, "The paper's gauge chain"): the same 50 N, 2 mV/V cell excited at 10 V, an
+// The paper's chain (docs/hil-model.md, "The assumed AD620 chain"): the same 50 N, 2 mV/V cell excited at 10 V, an
 // AD620 instrumentation amplifier at gain 495 and a 16-bit ADC over +-10 V read once per 1 kHz control tick, with no
 // filter: the AD620's 9 nV/rtHz and the bridge's 2.4 nV/rtHz over the amplifier's 24 kHz, aliased into the samples.
 inline StrainGaugeParams paper_adc_gauge() {
