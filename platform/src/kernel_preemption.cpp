@@ -65,7 +65,8 @@ Preemption preemption_of(const KernelPreemptionSources& s) {
   }
   if (has_word(s.uname_version, "PREEMPT_RT")) return Preemption::realtime;
   if (has_word(s.uname_version, "PREEMPT_DYNAMIC")) {
-    if (const auto mode = cmdline_mode(s.cmdline)) return *mode;
+    if (!s.cmdline) return Preemption::unknown;
+    if (const auto mode = cmdline_mode(*s.cmdline)) return *mode;
     if (s.build_config) {
       if (const auto mode = build_default("\n" + *s.build_config)) return *mode;
     }
@@ -79,7 +80,7 @@ KernelPreemptionSources read_kernel_preemption_sources() {
   KernelPreemptionSources s;
   utsname u{};
   if (::uname(&u) == 0) s.uname_version = u.version;
-  s.cmdline = read_text("/proc/cmdline").value_or("");
+  s.cmdline = read_text("/proc/cmdline");
   s.debugfs_preempt = read_text("/sys/kernel/debug/sched/preempt");
   s.build_config = read_text(std::string("/boot/config-") + u.release);
   return s;
@@ -97,6 +98,30 @@ std::string_view name(Preemption p) noexcept {
       return "unknown";
   }
   return "unknown";
+}
+
+std::string describe(Preemption p, const KernelPreemptionSources& s) {
+  const bool dynamic = has_word(s.uname_version, "PREEMPT_DYNAMIC");
+  std::string from = s.debugfs_preempt && debugfs_mode(*s.debugfs_preempt) ? "debugfs sched/preempt"
+                     : has_word(s.uname_version, "PREEMPT_RT")             ? "uname -v"
+                     : !dynamic                                            ? "uname -v"
+                     : s.cmdline && cmdline_mode(*s.cmdline)               ? "preempt= on the kernel command line"
+                     : s.cmdline && s.build_config                         ? "the build's default, /boot/config"
+                                                                           : "";
+  switch (p) {
+    case Preemption::full:
+    case Preemption::realtime:
+      return "kernel preemption: " + std::string(name(p)) + " (" + from + ")";
+    case Preemption::voluntary:
+      return "warning: the kernel runs the voluntary preemption model (" + from +
+             "): an ordinary process inside a system call can hold the loop for milliseconds whatever its priority; "
+             "boot with preempt=full or a PREEMPT_RT kernel (docs/deploy.md, \"The board's kernel\")";
+    case Preemption::unknown:
+      break;
+  }
+  return std::string("kernel preemption: not known (PREEMPT_DYNAMIC; ") +
+         (s.cmdline ? "no preempt= on the command line and no readable /boot/config" : "/proc/cmdline not readable") +
+         "); the loop needs preempt=full (docs/deploy.md, \"The board's kernel\")";
 }
 
 }  // namespace lever::platform

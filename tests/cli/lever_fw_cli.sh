@@ -24,6 +24,13 @@ check "--help documents the exit codes" grep -q "2 bad input" "$work/help"
 "$fw" --version >"$work/version"; check "--version exits 0" test $? -eq 0
 check "--version names the program" grep -q "lever-fw" "$work/version"
 "$fw" >/dev/null 2>"$work/err"; check "no --config: exit 2" test $? -eq 2
+# --kernel-check on this machine's kernel: one line naming a model (which one is the machine's), exit 0.
+"$fw" --config "$examples/hsi.toml" --kernel-check >"$work/kernel" 2>"$work/err"
+check "--kernel-check exits 0 (got $?)" test $? -eq 0
+check "--kernel-check says one line naming the model: $(cat "$work/kernel")" \
+  grep -qxE "lever-fw: (kernel preemption: (full|PREEMPT_RT) \(.+\)|kernel preemption: not known \(.+|warning: the kernel runs the voluntary preemption model \(.+)" "$work/kernel"
+"$fw" --config "$examples/hsi.toml" --kernel-check --motor-off >/dev/null 2>&1
+check "--kernel-check with --motor-off: exit 2" test $? -eq 2
 
 : >"$work/empty.toml"
 bad_config "unknown key" "codec.motion.q: unknown key" $'[codec.motion]\nq = 0.1'

@@ -66,9 +66,9 @@ start_fw() {
   printf -v "${1}_pid" '%s' "$(systemctl show -p MainPID --value "lever-fw@$1")"
 }
 
-# preempts_fully ROLE: lever-fw found the board's kernel in the full (or PREEMPT_RT) preemption model: it warns
-# otherwise (platform/include/lever/platform/kernel_preemption.hpp)
-preempts_fully() { ! has_text "$out/$1.err" "preemption model"; }
+# preempts_fully ROLE: the unit's ExecStartPre (lever-fw --kernel-check) found the board's kernel in the full
+# preemption model, and lever-fw did not warn of another (platform/include/lever/platform/kernel_preemption.hpp)
+preempts_fully() { has_text "$out/$1.err" "kernel preemption: full" && ! has_text "$out/$1.err" "preemption model"; }
 
 # timing_kept ROLE: over every status line so far, the lever's worst lost time within one timing window stayed
 # within its budget, (timing.fault_after_ms - 1) ms of its configuration: armed all along, it would not have

@@ -111,18 +111,12 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
     }
   });
 
+  // Under the unit /proc/cmdline is hidden (ProcSubset=pid) and the model may be unknown: its ExecStartPre says it
+  // then, unsandboxed (--kernel-check). Only a model known to be voluntary is worth a word here.
   if (config.board.realtime_priority > 0) {
-    const auto preemption = platform::preemption_of(platform::read_kernel_preemption_sources());
-    if (preemption == platform::Preemption::voluntary) {
-      fmt::print(stderr,
-                 "lever-fw: warning: the kernel runs the voluntary preemption model: an ordinary process inside a "
-                 "system call can hold this loop for milliseconds whatever its priority; boot with preempt=full or "
-                 "a PREEMPT_RT kernel (docs/deploy.md, \"The board's kernel\")\n");
-    } else if (preemption == platform::Preemption::unknown) {
-      fmt::print(stderr,
-                 "lever-fw: note: the kernel's preemption model is not known (PREEMPT_DYNAMIC, no preempt= on its "
-                 "command line, no readable /boot/config); the loop needs preempt=full (docs/deploy.md)\n");
-    }
+    const auto sources = platform::read_kernel_preemption_sources();
+    if (const auto preemption = platform::preemption_of(sources); preemption == platform::Preemption::voluntary)
+      fmt::print(stderr, "lever-fw: {}\n", platform::describe(preemption, sources));
   }
   auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
   if (!loop_result) {

@@ -12,6 +12,7 @@
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
+#include "lever/platform/kernel_preemption.hpp"
 #include "lever/platform/motor_guard.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/parse.hpp"
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
   program::describe(app, "lever-fw");
   std::string config_path, can, motor_state;
   std::optional<protocol::Role> role;
-  bool check_config = false, stats_json = false, motor_off = false;
+  bool check_config = false, stats_json = false, motor_off = false, kernel_check = false;
   app.add_option("--config", config_path, "TOML configuration (docs/lever-fw.md lists every key)")
       ->required()
       ->check(program::path());
@@ -48,6 +49,10 @@ int main(int argc, char** argv) {
                "stop the board's motor (PWM at duty 0 and enabled, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
       ->excludes("--check-config");
+  app.add_flag("--kernel-check", kernel_check,
+               "say which preemption model the kernel runs (the loop needs full or PREEMPT_RT) and exit 0: the "
+               "service's ExecStartPre, unsandboxed, where lever-fw itself cannot read /proc/cmdline")
+      ->excludes("--check-config", "--motor-off");
   app.add_option("--motor-state", motor_state,
                  "a file naming the motor and the run: written at start, before the motor is opened; with it, "
                  "--motor-off stops that motor only, and under systemd only its own invocation's (the service: "
@@ -55,6 +60,11 @@ int main(int argc, char** argv) {
       ->check(program::path());
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
+  if (kernel_check) {
+    const auto sources = platform::read_kernel_preemption_sources();
+    fmt::print("lever-fw: {}\n", platform::describe(platform::preemption_of(sources), sources));
+    return 0;
+  }
   // Before the configuration is validated: the motor must stop whatever else in the file is wrong.
   if (motor_off) return app::motor_off(config_path, motor_state);
 

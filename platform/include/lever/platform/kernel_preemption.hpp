@@ -18,19 +18,23 @@ enum class Preemption {
 
 struct KernelPreemptionSources {
   std::string uname_version;                   // uname(2)'s version: "#1 SMP PREEMPT_DYNAMIC Debian 6.1.192-2 ..."
-  std::string cmdline;                         // /proc/cmdline
+  std::optional<std::string> cmdline;          // /proc/cmdline (hidden under systemd's ProcSubset=pid)
   std::optional<std::string> debugfs_preempt;  // /sys/kernel/debug/sched/preempt: "none voluntary (full)"
   std::optional<std::string> build_config;     // /boot/config-RELEASE
 };
 
 // The model the sources name. In order: debugfs's current mode (PREEMPT_DYNAMIC, may have been switched at run
-// time), PREEMPT_RT in the version, for PREEMPT_DYNAMIC the cmdline's preempt= and else the build's default, a
-// static PREEMPT in the version; a version without PREEMPT is a voluntary or none build.
+// time), PREEMPT_RT in the version, for PREEMPT_DYNAMIC the cmdline's preempt= and else the build's default (only
+// where the cmdline could be read: a hidden one may hold preempt=), a static PREEMPT in the version; a version
+// without PREEMPT is a voluntary or none build.
 Preemption preemption_of(const KernelPreemptionSources& sources);
 
 // The running kernel's sources, each read where it is readable.
 KernelPreemptionSources read_kernel_preemption_sources();
 
 std::string_view name(Preemption p) noexcept;
+
+// One line for a person: the model and the sources that named it; for voluntary and unknown, what to do.
+std::string describe(Preemption p, const KernelPreemptionSources& sources);
 
 }  // namespace lever::platform
