@@ -66,8 +66,6 @@ r() { jq -r "$1" "$out/two-sites.report"; }
 check "both stayed armed through the scenario (armed $(r .armed_s) s)" test "$(r '.armed_s >= 14.5')" = true
 check "the TOP holds the HSI's position across the link: rms error $(r .position_rmse) rad < 0.025" \
   test "$(r '.position_rmse < 0.025')" = true
-check "the HSI kept its loop's time from its start on" timing_kept hsi
-check "(TOP too)" timing_kept top
 
 systemctl stop lever-bridge@site-a lever-bridge@site-b
 for site in site-a site-b; do

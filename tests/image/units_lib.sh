@@ -66,22 +66,6 @@ start_fw() {
   printf -v "${1}_pid" '%s' "$(systemctl show -p MainPID --value "lever-fw@$1")"
 }
 
-# preempts_fully ROLE: the unit's ExecStartPre (lever-fw --kernel-check) found the board's kernel in the full
-# preemption model, and lever-fw did not warn of another (platform/include/lever/platform/kernel_preemption.hpp)
-preempts_fully() { has_text "$out/$1.err" "kernel preemption: full" && ! has_text "$out/$1.err" "preemption model"; }
-
-# timing_kept ROLE: over every status line so far, the lever's worst lost time within one timing window stayed
-# within its budget, (timing.fault_after_ms - 1) ms of its configuration: armed all along, it would not have
-# latched TIMING (firmware/core/include/lever/fw/step_timing.hpp)
-timing_kept() {
-  local budget worst
-  budget=$(awk '/^\[/ { s = ($1 == "[timing]") } s && $1 == "fault_after_ms" { print ($3 - 1) * 1000; exit }' \
-    "/etc/lever/$1.toml")
-  worst=$(jq -s 'map(.worst_lost_in_window_us) | max' "$out/$1.stats")
-  echo "$1: worst lost time in one timing window $worst us, budget $budget us"
-  [[ -n $budget && $worst =~ ^[0-9]+$ ]] && ((worst <= budget))
-}
-
 # check_unit_user ROLE: the running lever-fw is the lever user's, with the group gpio, and it did not run as root
 check_unit_user() {
   local pid=${1}_pid uid groups

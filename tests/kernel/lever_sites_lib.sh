@@ -141,12 +141,9 @@ two_sites() {
 }
 
 # start_serve NAME ARGS...: lever-hil serve in the background, waiting until its devices are up
-# The world runs at SCHED_FIFO 1: it stands for hardware, which no ordinary process preempts. Under full preemption
-# an ordinary world was preempted by ordinary load while it held gpio-sim's chip mutex, and the loops (FIFO 80),
-# reading their lines, waited on it: up to 1.1 ms a step, TIMING at arming (docs/deploy.md, "The board's kernel").
 start_serve() {
   local name=$1; shift
-  chrt -f 1 "$bin/lever-hil" serve --hsi-config "$work/hsi.toml" --top-config "$work/top.toml" "$@" \
+  "$bin/lever-hil" serve --hsi-config "$work/hsi.toml" --top-config "$work/top.toml" "$@" \
     >"$out/$name.report" 2>"$out/$name.serve" &
   serve_pid=$!
   pids+=("$serve_pid")
