@@ -57,24 +57,32 @@ std::optional<Preemption> build_default(std::string_view config) {
   return std::nullopt;
 }
 
+// The model and the source that named it, decided once for preemption_of() and describe().
+struct Verdict {
+  Preemption model;
+  const char* from;  // "" where no source names it
+};
+
+Verdict decide(const KernelPreemptionSources& s) {
+  if (s.debugfs_preempt) {
+    if (const auto mode = debugfs_mode(*s.debugfs_preempt)) return {*mode, "debugfs sched/preempt"};
+  }
+  if (has_word(s.uname_version, "PREEMPT_RT")) return {Preemption::realtime, "uname -v"};
+  if (has_word(s.uname_version, "PREEMPT_DYNAMIC")) {
+    if (!s.cmdline) return {Preemption::unknown, ""};
+    if (const auto mode = cmdline_mode(*s.cmdline)) return {*mode, "preempt= on the kernel command line"};
+    if (s.build_config) {
+      if (const auto mode = build_default("\n" + *s.build_config)) return {*mode, "the build's default, /boot/config"};
+    }
+    return {Preemption::unknown, ""};
+  }
+  if (has_word(s.uname_version, "PREEMPT")) return {Preemption::full, "uname -v"};
+  return {Preemption::voluntary, "uname -v"};
+}
+
 }  // namespace
 
-Preemption preemption_of(const KernelPreemptionSources& s) {
-  if (s.debugfs_preempt) {
-    if (const auto mode = debugfs_mode(*s.debugfs_preempt)) return *mode;
-  }
-  if (has_word(s.uname_version, "PREEMPT_RT")) return Preemption::realtime;
-  if (has_word(s.uname_version, "PREEMPT_DYNAMIC")) {
-    if (!s.cmdline) return Preemption::unknown;
-    if (const auto mode = cmdline_mode(*s.cmdline)) return *mode;
-    if (s.build_config) {
-      if (const auto mode = build_default("\n" + *s.build_config)) return *mode;
-    }
-    return Preemption::unknown;
-  }
-  if (has_word(s.uname_version, "PREEMPT")) return Preemption::full;
-  return Preemption::voluntary;
-}
+Preemption preemption_of(const KernelPreemptionSources& s) { return decide(s).model; }
 
 KernelPreemptionSources read_kernel_preemption_sources() {
   KernelPreemptionSources s;
@@ -100,20 +108,14 @@ std::string_view name(Preemption p) noexcept {
   return "unknown";
 }
 
-std::string describe(Preemption p, const KernelPreemptionSources& s) {
-  const bool dynamic = has_word(s.uname_version, "PREEMPT_DYNAMIC");
-  std::string from = s.debugfs_preempt && debugfs_mode(*s.debugfs_preempt) ? "debugfs sched/preempt"
-                     : has_word(s.uname_version, "PREEMPT_RT")             ? "uname -v"
-                     : !dynamic                                            ? "uname -v"
-                     : s.cmdline && cmdline_mode(*s.cmdline)               ? "preempt= on the kernel command line"
-                     : s.cmdline && s.build_config                         ? "the build's default, /boot/config"
-                                                                           : "";
+std::string describe(const KernelPreemptionSources& s) {
+  const auto [p, from] = decide(s);
   switch (p) {
     case Preemption::full:
     case Preemption::realtime:
-      return "kernel preemption: " + std::string(name(p)) + " (" + from + ")";
+      return "kernel preemption: " + std::string(name(p)) + " (" + std::string(from) + ")";
     case Preemption::voluntary:
-      return "warning: the kernel runs the voluntary preemption model (" + from +
+      return "warning: the kernel runs the voluntary preemption model (" + std::string(from) +
              "): an ordinary process inside a system call can hold the loop for milliseconds whatever its priority; "
              "boot with preempt=full or a PREEMPT_RT kernel (docs/deploy.md, \"The board's kernel\")";
     case Preemption::unknown:

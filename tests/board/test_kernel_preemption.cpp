@@ -39,7 +39,7 @@ TEST_CASE("kernel preemption: debugfs's current mode wins over the command line 
 TEST_CASE("kernel preemption: a dynamic kernel with no preempt= and no readable configuration is not known") {
   const KernelPreemptionSources s{kDebianDynamic, "quiet", std::nullopt, std::nullopt};
   CHECK(preemption_of(s) == Preemption::unknown);
-  CHECK_THAT(describe(Preemption::unknown, s), Catch::Contains("no preempt= on the command line"));
+  CHECK_THAT(describe(s), Catch::Contains("no preempt= on the command line"));
   KernelPreemptionSources full_default = s;
   full_default.build_config = "CONFIG_PREEMPT=y\nCONFIG_PREEMPT_DYNAMIC=y\n";
   CHECK(preemption_of(full_default) == Preemption::full);
@@ -49,16 +49,16 @@ TEST_CASE("kernel preemption: a hidden command line (systemd's ProcSubset=pid) l
   // The build's default is voluntary, but the hidden command line may hold preempt=full: no guess.
   const KernelPreemptionSources s{kDebianDynamic, std::nullopt, std::nullopt, kDebianConfig};
   CHECK(preemption_of(s) == Preemption::unknown);
-  CHECK_THAT(describe(Preemption::unknown, s), Catch::Contains("/proc/cmdline not readable"));
+  CHECK_THAT(describe(s), Catch::Contains("/proc/cmdline not readable"));
   // A static build needs no command line.
   CHECK(preemption_of({"#1 SMP Debian 5.10.228-1", std::nullopt, std::nullopt, std::nullopt}) == Preemption::voluntary);
 }
 
 TEST_CASE("kernel preemption: the line says the model and which source named it") {
   KernelPreemptionSources s{kDebianDynamic, "root=/dev/vda preempt=full", std::nullopt, kDebianConfig};
-  CHECK(describe(preemption_of(s), s) == "kernel preemption: full (preempt= on the kernel command line)");
+  CHECK(describe(s) == "kernel preemption: full (preempt= on the kernel command line)");
   s.cmdline = "root=/dev/vda";
-  CHECK_THAT(describe(preemption_of(s), s),
+  CHECK_THAT(describe(s),
              Catch::StartsWith("warning: the kernel runs the voluntary preemption model (the build's default"));
 }
 

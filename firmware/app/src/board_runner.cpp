@@ -115,8 +115,8 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   // then, unsandboxed (--kernel-check). Only a model known to be voluntary is worth a word here.
   if (config.board.realtime_priority > 0) {
     const auto sources = platform::read_kernel_preemption_sources();
-    if (const auto preemption = platform::preemption_of(sources); preemption == platform::Preemption::voluntary)
-      fmt::print(stderr, "lever-fw: {}\n", platform::describe(preemption, sources));
+    if (platform::preemption_of(sources) == platform::Preemption::voluntary)
+      fmt::print(stderr, "lever-fw: {}\n", platform::describe(sources));
   }
   auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
   if (!loop_result) {

@@ -61,8 +61,7 @@ int main(int argc, char** argv) {
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
   if (kernel_check) {
-    const auto sources = platform::read_kernel_preemption_sources();
-    fmt::print("lever-fw: {}\n", platform::describe(platform::preemption_of(sources), sources));
+    fmt::print("lever-fw: {}\n", platform::describe(platform::read_kernel_preemption_sources()));
     return 0;
   }
   // Before the configuration is validated: the motor must stop whatever else in the file is wrong.

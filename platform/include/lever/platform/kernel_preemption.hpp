@@ -1,8 +1,8 @@
 #pragma once
 // Which preemption model the running kernel uses, from what an unprivileged process can read. A real-time priority
 // only helps where the kernel lets the loop in: under the voluntary (or no-forced-preemption) model an ordinary
-// process inside a system call holds every loop of its CPU until that kernel path yields, 7 ms measured on the
-// reference board (docs/deploy.md, "The board's kernel").
+// process inside a system call holds every loop of its CPU until that kernel path yields (docs/deploy.md, "The
+// board's kernel").
 #include <optional>
 #include <string>
 #include <string_view>
@@ -34,7 +34,7 @@ KernelPreemptionSources read_kernel_preemption_sources();
 
 std::string_view name(Preemption p) noexcept;
 
-// One line for a person: the model and the sources that named it; for voluntary and unknown, what to do.
-std::string describe(Preemption p, const KernelPreemptionSources& sources);
+// One line for a person: the model and the source that named it; for voluntary and unknown, what to do.
+std::string describe(const KernelPreemptionSources& sources);
 
 }  // namespace lever::platform
