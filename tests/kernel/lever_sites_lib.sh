@@ -201,11 +201,15 @@ wait_for() {
   return 1
 }
 
-# no_guard_fired ROLE...: no motor guard of these levers has fired. A lever starting beside another on one CPU
-# must not stall the running loop past its guard's deadline (docs/deploy.md, "The board's kernel").
+# no_guard_fired ROLE...: each lever's motor guard started and none has fired. A lever starting beside another on
+# one CPU must not stall the running loop past its guard's deadline (docs/deploy.md, "The board's kernel"). The
+# guard's start line makes an empty or missing log fail rather than pass.
 no_guard_fired() {
   local role
-  for role; do ! has_text "$out/$role.err" "loop has not stepped for" || return 1; done
+  for role; do
+    has_text "$out/$role.err" "motor guard pid" || { echo "$role: no motor guard started (its log: $out/$role.err)" >&2; return 1; }
+    ! has_text "$out/$role.err" "loop has not stepped for" || return 1
+  done
 }
 
 # up_and_homed: both levers up disarmed, then homed by lever-ctl home (the checks every pair test starts with;
