@@ -100,16 +100,38 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 # frame, so the error is the TOP's angle less the HSI's 21 ms before. The operator must have moved: free-motion
 # reaches over 0.1-0.3 rad in 0.3-1 s (docs/hil-model.md), at rest it would prove nothing.
 # The bound, from the TOP's loop at the operator's speed (its rms v and acceleration a from the same ticks), term by
-# term, with the shipped example's gains. The loop: torque = kp (r - x) + kd (r' - x') + kff r' on the lever
-# (inertia J, viscous b, Coulomb Fc: the HIL's lever, docs/hil-model.md; controllers.hpp); following a reference
-# moving at v it lags by ((b - kff) v + Fc + J a) / kp (kd acts on the velocity's error, which is 0 in the steady
-# ramp), whose rms is at most (|b - kff| v_rms + Fc + J a_rms) / kp. Each position is an encoder's count, uniform within one (2 pi / 16384):
-# the HSI's on the wire and the TOP's own, 1/sqrt(12) of a count rms each. The reference itself: its frame read up to one period
-# (1 ms) after the 21 ms taken off, v_rms x 1 ms; and the motion deadband holds the velocity within p |v| + floor of
-# the HSI's between frames, each frame carrying the position, so the reference drifts by at most (p v_rms + floor)
-# times the mean interval between the HSI's motion frames (over the whole run, rest included: longer than while
-# moving). It says the pair tracks as derived, not that the TOP has its gain: at this operator's motion the
-# reference's own error dominates (the commit that wrote this bound says what a tenth of the gain gave).
+# term, with the shipped example's gains. Each "rms" below is over the judged ticks; Minkowski sums them, and each
+# filter's gain is its impulse response's L1 norm (Young), which for a filter whose response is not negative is its
+# DC gain.
+# - The frames: the TOP's received reference r^ is reset to the HSI's position r at each motion frame (the position
+#   rides on it) and integrated between frames with the frame's velocity, which the motion deadband keeps within
+#   dv = p |v| + floor of the HSI's (docs/codec.md). Its drift d = r^ - r is at most dv times the time since the
+#   last frame, taken as (p v + floor) times the mean interval between the HSI's motion frames over the whole run
+#   (rest included: longer than while moving).
+# - The link's loss q = 2 % (netem): after k lost frames the TOP's velocity is up to (k + 1) deadband steps off, for
+#   k + 1 intervals, so its drift up to (k + 1)^2 times; over the time such stretches take ((k + 1) q^k of it), dv's
+#   rms grows by sqrt(sum (k+1)^3 q^k / sum (k+1) q^k) and d's by sqrt(sum (k+1)^5 q^k / sum (k+1) q^k). The 25 %
+#   phase is not judged: each re-arm there is disarmed again well inside the 0.5 s settle.
+# - tdpa (this test's mode; top_role.hpp): the controller's reference r_p integrates the frame's velocity plus
+#   g (r^ - r_p), g the drift gain; in free space no power flows, so the passivity limit leaves it alone. Its error
+#   d_p = r_p - r obeys d_p' = dv + g (d - d_p): rms(d_p) <= rms(d) + rms(dv) / g (a first-order filter of gain 1/g
+#   on dv: the reference integrates the deadband's velocity error and is pulled back only at rate g). Its velocity
+#   error dv_p = dv + g (d - d_p), so rms(dv_p) <= 2 rms(dv) + 2 g rms(d).
+# - The loop on the lever (inertia J, viscous b, Coulomb Fc: the HIL's lever, docs/hil-model.md; controllers.hpp):
+#   J x'' + b x' + Fc sgn(x') = kp (r_p - x) + kd (r_p' - x') + kff r_p', so the error e = x - r obeys
+#   J e'' + (b + kd) e' + kp e = kp d_p + (kd + kff) dv_p + (kff - b) v - J a - Fc sgn. With damping ratio
+#   z = (b + kd) / (2 sqrt(kp J)) >= 1 (checked below) its response is not negative and its gain is 1/kp:
+#   rms(e) <= rms(d_p) + (kd + kff) rms(dv_p) / kp + (|b - kff| v + J a + Fc) / kp.
+# - The reference's read: its frame read up to one period (1 ms) after the 21 ms taken off, v x 1 ms; each position
+#   an encoder's count, uniform within one (2 pi / 16384): the HSI's on the wire and the TOP's own, 1/sqrt(12) of a
+#   count rms each.
+# The first derivation (cdc9291) had the loop's lag, the read, the drift and the counts only: it left out the tdpa
+# reference's pull and the frame's velocity error through kd and kff. The operator's first reach (up to 1.4 rad/s
+# from the homed lever, decelerating) then holds most of the error, the TOP's reference running ahead by about
+# dv / g; CI failed this test once on it, and a run here gave 2.21 mrad against that bound's 1.69. The bound says the
+# pair tracks as derived, not that the TOP has its gain or its pull: the pull term takes dv steady at its deadband
+# maximum, while the operator's reaches flip its sign within 1/g (a tenth of the gain, cdc9291, and no pull at all,
+# this commit's message, stay inside it).
 read -r ticks rms travel speed accel < <(awk -F, -v delay=21 -v settle=500 '
   BEGIN { since = -1 }
   NR == 1 { next }
@@ -131,15 +153,22 @@ check "the operator moved the HSI while both were armed: $travel rad of travel, 
 motion_frames=$(jq '.messages.LeverMotion.frames // 0' "$work/decoded")
 session_s=$(awk 'NR == 1 { gsub(/[()]/, "", $1); t0 = $1 } { gsub(/[()]/, "", $1); t = $1 } END { print t - t0 }' \
   "$out/two-sites-hsi.candump")
-bound=$(awk -v kp="$(example_key top control.position kp_nm_per_rad)" \
-  -v kff="$(example_key top control.position kff_nms)" -v p="$(example_key hsi codec.motion p)" -v floor="$(example_key hsi codec.motion floor)" \
-  -v counts="$(example_key top encoder counts_per_rev)" -v J=2e-3 -v b=0.01 -v Fc=0.01 -v v="$speed" -v a="$accel" \
+bound=$(awk -v kp="$(example_key top control.position kp_nm_per_rad)" -v kd="$(example_key top control.position kd_nms)" \
+  -v kff="$(example_key top control.position kff_nms)" -v g="$(example_key top control.passivity drift_gain_per_s)" \
+  -v p="$(example_key hsi codec.motion p)" -v floor="$(example_key hsi codec.motion floor)" \
+  -v counts="$(example_key top encoder counts_per_rev)" -v J=2e-3 -v b=0.01 -v Fc=0.01 -v q=0.02 -v v="$speed" -v a="$accel" \
   -v frames="$motion_frames" -v s="$session_s" '
-  BEGIN { bk = b - kff; if (bk < 0) bk = -bk; lag = (bk * v + Fc + J * a) / kp; read = v * 0.001
-          drift = (p * v + floor) * s / frames; quant = 2 * (2 * 3.14159265 / counts) / sqrt(12)
-          printf "%.5f %.5f %.5f %.5f %.5f\n", lag + read + drift + quant, lag, read, drift, quant }')
-read -r bound lag_term read_term drift_term quant_term <<<"$bound"
-echo "tracking bound: $bound rad = loop lag $lag_term + frame read $read_term + deadband drift $drift_term + counts $quant_term ($motion_frames motion frames in $session_s s)"
+  BEGIN { bk = b - kff; if (bk < 0) bk = -bk
+          for (k = 0; k < 40; k++) { w = (k + 1) * q ^ k; s1 += w; s3 += w * (k + 1) ^ 2; s5 += w * (k + 1) ^ 4 }
+          dv = (p * v + floor) * sqrt(s3 / s1); drift = (p * v + floor) * s / frames * sqrt(s5 / s1)
+          pull = dv / g; velocity = (kd + kff) * (2 * dv + 2 * g * drift) / kp
+          lag = (bk * v + Fc + J * a) / kp; read = v * 0.001; quant = 2 * (2 * 3.14159265 / counts) / sqrt(12)
+          printf "%.5f %.5f %.5f %.5f %.5f %.5f %.5f %.3f\n", drift + pull + velocity + lag + read + quant, drift, pull,
+            velocity, lag, read, quant, (b + kd) / (2 * sqrt(kp * J)) }')
+read -r bound drift_term pull_term velocity_term lag_term read_term quant_term zeta <<<"$bound"
+echo "tracking bound: $bound rad = deadband drift $drift_term + tdpa pull $pull_term + velocity error $velocity_term + loop lag $lag_term + frame read $read_term + counts $quant_term ($motion_frames motion frames in $session_s s; damping ratio $zeta)"
+check "the bound holds for this loop: the TOP's damping ratio $zeta >= 1 (kp, kd from the example, J, b from the HIL's lever)" \
+  awk -v z="$zeta" 'BEGIN { exit !(z == z + 0 && z >= 1) }'
 check "the TOP tracks the HSI over the link: rms error $rms rad <= $bound against the HSI's position 21 ms earlier" \
   awk -v e="$rms" -v b="$bound" 'BEGIN { exit !(e == e + 0 && b == b + 0 && e <= b) }'
 jq -c '.messages | map_values(.frames)' "$work/decoded"
