@@ -6,7 +6,7 @@
 # interval the experimenter's view names (a test's oracle: the subject's own terminal never shows it), wrong on the
 # first trial; one wrong key first, which must be asked again. So the session runs: pass 1 wrong at 10 %, right at
 # 15 %; the briefing; pass 2 right at 10 % (killed in its second interval, then resumed); pass 3 right at 5 %
-# (half of pass 2's). Intervals of 2 s; one right answer ends a pass.
+# (half of pass 2's). Intervals of 2 s; one right answer ends a pass. Then a rating session on the same pair.
 # usage: lever_study.sh BIN_DIR
 set -uo pipefail
 . "$(dirname "$0")/lib.sh"
@@ -121,4 +121,68 @@ check "lever-study report --table traffic: at 10 % and 15 %, each direction belo
   awk -F, 'NR > 1 { m[$1 " " ($2 + 0)] = $5 + 0 }
     END { exit !(m["velocity 0.1"] < m["velocity 0"] && m["velocity 0.15"] < m["velocity 0"] &&
                  m["force 0.1"] < m["force 0"] && m["force 0.15"] < m["force 0"]) }' "$out/traffic.csv"
-finish "a 3IFC session by lever-study on the pair"
+
+# A rating session (IV-B-3) on the same pair, intervals of 0.5 s: the familiarization, then run 1 on the velocity
+# path only and run 2 on the force path only, each the paper's twelve p in a random order, a rating after each
+# interval. The rater answers Enter to the familiarization's prompts and, to each rating, 10 - round(p / 5 %) from
+# the p the experimenter's view names (the test's oracle: 10 at p = 0 down to 2 at 40 %), so every answer in the
+# log can be checked against its interval's p.
+rating_log=$out/rating.jsonl
+rating_progress=$out/rating-progress.txt
+: >"$rating_progress"
+rater() {  # rater SESSION_OUT ANSWERS_FIFO
+  local session_out=$1 seen=0 line per_mille
+  local -a lines=()
+  exec 3>"$2"
+  while kill -0 "$study_pid" 2>/dev/null; do
+    mapfile -t lines <"$session_out"
+    while ((seen < ${#lines[@]})); do
+      line=${lines[seen]}
+      seen=$((seen + 1))
+      case $line in
+        *"Press Enter"*) echo >&3 ;;
+        "How did it feel"*)
+          per_mille=$(grep '^attempt ' "$rating_progress" | tail -n 1 | sed -E 's/.*: p ([0-9]+)\.([0-9])[0-9] %.*/\1\2/')
+          echo $((10 - (10#$per_mille + 25) / 50)) >&3 ;;
+      esac
+    done
+    sleep 0.1
+  done
+  exec 3>&-
+}
+mkfifo "$work/answers3"
+: >"$out/rater.txt"
+"$bin/lever-study" run --can vcan0 --pair 0 --protocol rating --subject rig --seed 11 --log "$rating_log" \
+  --progress "$rating_progress" --interval-s 0.5 <"$work/answers3" >"$out/rater.txt" 2>"$out/rating.err" &
+study_pid=$!
+rater "$out/rater.txt" "$work/answers3"
+wait "$study_pid"; code=$?
+check "the rating session ran to its end (exit $code: $(head -c 200 "$out/rating.err"))" test "$code" -eq 0
+rjq() { jq -s -r "$1" "$rating_log"; }
+ratings='[.[1:][] | select(.kind == "rating" and .void == null)]'
+check "the rater's prompts never show p" bash -c "! grep -qiE '%|carri|p = |0\.[0-9]' '$out/rater.txt'"
+check "familiarization first, then 24 ratings ($(rjq '[.[1:][] | select(.void == null) | .kind] | group_by(.) | map("\(.[0]) \(length)") | join(", ")'))" \
+  test "$(rjq '[.[1:][] | select(.void == null) | .kind] | (.[0] == "familiarization") and (map(select(. == "rating")) | length) == 24')" = true
+paper_p='[0, 25, 50, 75, 100, 125, 150, 200, 250, 300, 350, 400]'
+for run in 1:velocity 2:force; do
+  check "run ${run%%:*}: the ${run#*:} path only, each of the paper's twelve p once ($(rjq "$ratings | map(select(.pass == ${run%%:*}) | .p * 1000 | round) | join(\" \")"))" \
+    test "$(rjq "$ratings | map(select(.pass == ${run%%:*})) | (map(.direction) | unique) == [\"${run#*:}\"] and
+                  (map(.p * 1000 | round) | sort) == $paper_p")" = true
+done
+check "the order is random: neither run rates the twelve p in ascending order" \
+  test "$(rjq ". as \$all | [1, 2] | map(. as \$r | \$all | $ratings | map(select(.pass == \$r) | .p) | . == sort) | any")" = false
+check "every rating interval's settings confirmed by both levers: p on the run's path, 0 on the other" \
+  test "$(rjq "$ratings | map(.p as \$p | .direction as \$d | .intervals[0].confirmed as \$c |
+                ((\$c.hsi.p - (if \$d == \"velocity\" then \$p else 0 end)) | fabs) < 1e-4 and
+                ((\$c.top.p - (if \$d == \"force\" then \$p else 0 end)) | fabs) < 1e-4) | all")" = true
+check "every rating interval lasted its 0.5 s on the bus's clock (within a heartbeat period, 25 ms)" \
+  test "$(rjq "$ratings | map(.intervals[0] | (.end_bus_us - .start_bus_us - 5e5) | fabs < 25e3) | all")" = true
+check "no answer lost or misplaced: each logged rating is the rater's answer to its interval's p" \
+  test "$(rjq "$ratings | map(.answer == 10 - (((.p * 1000 | round) + 25) / 50 | floor)) | all")" = true
+"$bin/lever-study" report --format csv --table ratings "$rating_log" >"$out/ratings.csv"
+cat "$out/ratings.csv"
+check "lever-study report --table ratings: 24 rows of one rating each, the mean the rater's answer to that p" \
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    { n++; pm = int($c["p"] * 1000 + 0.5); want = 10 - int((pm + 25) / 50); if ($c["n"] != 1 || $c["mean"] + 0 != want) bad++ }
+    END { exit !(n == 24 && bad == 0) }' "$out/ratings.csv"
+finish "a 3IFC session and a rating session by lever-study on the pair"
