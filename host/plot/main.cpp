@@ -122,7 +122,8 @@ int run(const std::string& input, const std::string& out_dir, const std::vector<
   if (s.source == "candump") program::OutputFile::write_all((dir / "frames.csv").string(), s.frames_csv, "--out");
   program::OutputFile::write_all((dir / "timeline.csv").string(), plot::timeline_csv(s), "--out");
   program::OutputFile::write_all((dir / "rates.csv").string(), plot::rates_csv(s), "--out");
-  program::OutputFile::write_all((dir / "plots.gp").string(), plot::gnuplot_script(s, title), "--out");
+  const plot::PlotScript script = plot::gnuplot_script(s, title);
+  program::OutputFile::write_all((dir / "plots.gp").string(), script.text, "--out");
 
   if (s.source == "candump") {
     print_log_summary(s, log, name, pair);
@@ -134,15 +135,19 @@ int run(const std::string& input, const std::string& out_dir, const std::vector<
                s.duration, motion, s.duration > 0 ? static_cast<double>(motion) / s.duration : 0.0, force,
                s.duration > 0 ? static_cast<double>(force) / s.duration : 0.0);
   }
+  for (const auto& what : script.left_out) fmt::print("not drawn: {}\n", what);
   if (!draw) return program::kSuccess;
   const int status_code = program::run_gnuplot(dir / "plots.gp");
   if (status_code != 0) {
-    fmt::print(stderr, "lever-plot: gnuplot {}; the CSV files are in {} (install gnuplot-nox for plots)\n",
-               status_code == 127 ? "could not be started" : fmt::format("failed (exit status {})", status_code),
+    fmt::print(stderr, "lever-plot: {}; the CSV files and plots.gp are in {}\n",
+               status_code == 127 ? "gnuplot could not be started (install gnuplot-nox for plots)"
+                                  : fmt::format("gnuplot failed (exit status {})", status_code),
                program::printable(out_dir));
     return program::kRuntimeFailure;
   }
-  fmt::print("plots: {}/{{positions,force,packet_rate,states}}.png\n", program::printable(out_dir));
+  std::string pngs;
+  for (const auto& png : script.pngs) pngs += (pngs.empty() ? "" : ", ") + program::printable((dir / png).string());
+  fmt::print("plots: {}\n", pngs);
   return program::kSuccess;
 }
 

@@ -254,6 +254,8 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
   }
   s.duration = log.frames.back().t - s.t0;
   b.rows_until(s.duration);
+  b.bin(
+      s.duration);  // the rates to the log's end: a quiet tail, or a pair that sent no data, is 0 frames/s, not no bins
 
   // Status lines on the time axis, and the TOP's position beside the HSI's at that time.
   s.status = status;

@@ -46,6 +46,27 @@ check "the TOP's positions from its status lines" test "$(awk -F, 'NR > 1 && $3 
 check "the faults the run ended with" grep -q "faults: .* TOP force_stale" "$work/summary"
 check "plots.gp redraws from another directory" bash -c "cd / && gnuplot '$work/session/plots.gp'"
 
+# A plain recording, the tool's most common input: no status lines, so no TOP position. The figures are drawn
+# with what the log has, gnuplot says nothing, and one line says what is not drawn.
+run "$log" --out "$work/plain"
+check "a plain recording: exit 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0
+check "a plain recording: gnuplot warned of nothing ($(head -c 200 "$work/err"))" test ! -s "$work/err"
+for png in positions force packet_rate states; do
+  check "a plain recording: $png.png is a PNG" bash -c "head -c 8 '$work/plain/$png.png' | od -An -c | grep -q 'P   N   G'"
+done
+check "a plain recording: says the TOP's position and the tracking error are not drawn" \
+  grep -q "^not drawn: the TOP's position and the tracking error" "$work/out"
+check "a plain recording: names the four PNGs" grep -q "^plots: .*positions.png, .*force.png, .*packet_rate.png, .*states.png$" "$work/out"
+# Heartbeats alone (a pair that never armed): no data frames, so no positions and no force; the rates and states
+# are drawn, and each figure left out is said.
+grep -E ' 70[01]#' "$log" >"$work/heartbeats.log"
+run "$work/heartbeats.log" --out "$work/heartbeats"
+check "heartbeats alone: exit 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0
+check "heartbeats alone: states.png and packet_rate.png, no positions.png or force.png" \
+  bash -c "test -s '$work/heartbeats/states.png' && test -s '$work/heartbeats/packet_rate.png' && test ! -e '$work/heartbeats/positions.png' && test ! -e '$work/heartbeats/force.png'"
+check "heartbeats alone: the positions and the force said not drawn" \
+  bash -c "grep -q '^not drawn: the HSI.s position' '$work/out' && grep -q '^not drawn: the force' '$work/out'"
+
 # Settings frames (docs/can-protocol.md): counted as dbc-decode counts them, each change listed once, the values in
 # frames.csv. The TOP: predictive, changes 42, tares 21, taring, p 0.466, floor 43.981 N, filter 3276.9 Hz; then
 # the same frame again (no new line); the HSI's defaults (p 0.1, floor 0.02 rad/s).
