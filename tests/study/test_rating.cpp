@@ -92,6 +92,21 @@ TEST_CASE("rating: one 30 s interval, p on the run's direction only", "[unit][st
   CHECK(t.intervals[0].p_force == 0.0);
 }
 
+TEST_CASE("rating: every interval of each run carries p on that run's direction only", "[unit][study]") {
+  auto r = familiarized();
+  for (const auto direction : {Direction::velocity, Direction::force}) {
+    for (int i = 0; i < 12; ++i) {
+      const auto& t = r.current();
+      REQUIRE(t.direction == direction);
+      REQUIRE(t.intervals.size() == 1);
+      CHECK(t.intervals[0].p_velocity == (direction == Direction::velocity ? t.p : 0.0));
+      CHECK(t.intervals[0].p_force == (direction == Direction::force ? t.p : 0.0));
+      REQUIRE(r.answer(5).accepted);
+    }
+  }
+  CHECK(r.done());
+}
+
 TEST_CASE("rating: a rating is a whole number from 1 to 10; anything else is refused and asked again",
           "[unit][study]") {
   auto r = familiarized();

@@ -157,6 +157,23 @@ TEST_CASE("log: a log replayed with another seed is refused: its records are not
   CHECK_THROWS_AS(study::resume(log), study::SessionLogError);
 }
 
+TEST_CASE("log: directions and kinds are written by the names docs/study.md gives, and read back", "[unit][study]") {
+  using lever::study::Direction;
+  using lever::study::Kind;
+  CHECK(lever::study::name(Direction::velocity) == "velocity");
+  CHECK(lever::study::name(Direction::force) == "force");
+  CHECK(lever::study::name(Direction::both) == "both");
+  CHECK(lever::study::name(Kind::familiarization) == "familiarization");
+  CHECK(lever::study::name(Kind::briefing) == "briefing");
+  CHECK(lever::study::name(Kind::three_ifc) == "3ifc");
+  CHECK(lever::study::name(Kind::rating) == "rating");
+  for (const auto d : {Direction::velocity, Direction::force, Direction::both})
+    CHECK(lever::study::direction_named(lever::study::name(d)) == d);
+  for (const auto k : {Kind::familiarization, Kind::briefing, Kind::three_ifc, Kind::rating})
+    CHECK(lever::study::kind_named(lever::study::name(k)) == k);
+  CHECK_FALSE(lever::study::direction_named("motion"));
+}
+
 TEST_CASE("log: the writer never writes over an existing session", "[unit][study]") {
   TempDir dir;
   const auto path = dir.path / "s01.jsonl";

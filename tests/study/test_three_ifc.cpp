@@ -137,6 +137,35 @@ TEST_CASE("3ifc: pass 3 starts at half of pass 2's result, with no briefing", "[
   CHECK(s.current().p == Approx(0.10));
 }
 
+TEST_CASE("3ifc: each pass counts its right answers from none: a pass never ends on the last one's run",
+          "[unit][study]") {
+  auto s = started();
+  answer_right(s, 3);  // pass 1 ends on three right in a row
+  s.acknowledge();     // the briefing
+  answer_right(s);
+  CHECK(s.current().pass == 2);
+  CHECK(s.right_in_a_row() == 1);
+  CHECK(s.passes().size() == 1);
+  answer_right(s, 2);  // pass 2 ends; pass 3 follows with no briefing
+  REQUIRE(s.passes().size() == 2);
+  answer_right(s);
+  CHECK(s.current().pass == 3);
+  CHECK(s.right_in_a_row() == 1);
+  CHECK(s.passes().size() == 2);
+}
+
+TEST_CASE("3ifc: the briefing presents the distortion, at the briefing's p on the study's directions",
+          "[unit][study]") {
+  auto s = started();
+  end_pass(s, 1);
+  const auto& b = s.current();
+  REQUIRE(b.kind == Kind::briefing);
+  CHECK(b.p == Approx(0.25));
+  REQUIRE(b.intervals.size() == 1);
+  CHECK(b.intervals[0].p_velocity == Approx(0.25));
+  CHECK(b.intervals[0].p_force == Approx(0.25));
+}
+
 TEST_CASE("3ifc: the threshold is the mean of the three passes' results", "[unit][study]") {
   auto s = started();
   end_pass(s, 7);  // 20 %
@@ -203,6 +232,19 @@ TEST_CASE("3ifc: a void trial is repeated: same pass, trial and p, the run of ri
   REQUIRE(s.passes().size() == 1);
   CHECK(s.passes()[0].p == Approx(0.05));
   CHECK(s.passes()[0].trials == 4);
+}
+
+TEST_CASE("3ifc: a void trial draws a new carrier: over 300 seeds it moves about two times in three", "[unit][study]") {
+  // A carrier kept through the void would move 0 times; a fresh uniform draw 200 +- 8 (binomial sd); below 150 has a
+  // chance under 1e-9.
+  int moved = 0;
+  for (std::uint64_t seed = 0; seed < 300; ++seed) {
+    auto s = started(seed);
+    const int before = s.current().carrier;
+    s.void_trial();
+    moved += s.current().carrier != before;
+  }
+  CHECK(moved > 150);
 }
 
 TEST_CASE("3ifc: an answer out of 1..3 is refused and changes nothing", "[unit][study]") {
