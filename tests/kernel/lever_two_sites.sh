@@ -126,12 +126,11 @@ check "both armed for $(r .armed_s) s in all (at least the 8 s the script holds 
 #   an encoder's count, uniform within one (2 pi / 16384): the HSI's on the wire and the TOP's own, 1/sqrt(12) of a
 #   count rms each.
 # The first derivation (cdc9291) had the loop's lag, the read, the drift and the counts only: it left out the tdpa
-# reference's pull and the frame's velocity error through kd and kff. The operator's first reach (up to 1.4 rad/s
-# from the homed lever, decelerating) then holds most of the error, the TOP's reference running ahead by about
-# dv / g; CI failed this test once on it, and a run here gave 2.21 mrad against that bound's 1.69. The bound says the
-# pair tracks as derived, not that the TOP has its gain or its pull: the pull term takes dv steady at its deadband
-# maximum, while the operator's reaches flip its sign within 1/g (a tenth of the gain, cdc9291, and no pull at all,
-# this commit's message, stay inside it).
+# reference's pull and the frame's velocity error through kd and kff, which the operator's first reach from the homed
+# lever (the run's fastest motion) brings out: the TOP's reference runs ahead by about dv / g there (08f06e0 has the
+# runs). The bound says the pair tracks as derived, not that the TOP has its gain or its pull: the pull term takes dv
+# steady at its deadband maximum, while the operator's reaches flip its sign within 1/g (a tenth of the gain, cdc9291,
+# and no pull at all, 08f06e0, stay inside it).
 read -r ticks rms travel speed accel < <(awk -F, -v delay=21 -v settle=500 '
   BEGIN { since = -1 }
   NR == 1 { next }
