@@ -26,6 +26,7 @@ inline const program::Choices<SpherePositionSensor> kPositionSensors{
     {"joint-encoders", SpherePositionSensor::joint_encoders},
     {"cartesian-grid", SpherePositionSensor::cartesian_grid},
     {"exact", SpherePositionSensor::exact}};
+inline const program::Choices<SphereTopClock> kTopClocks = program::choices_of(kAllTopClocks, name);
 inline const program::Choices<GaugeChain> kGaugeChains{
     {"topology", GaugeChain::topology}, {"dad141", GaugeChain::dad141}, {"paper-adc", GaugeChain::paper_adc}};
 inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};

@@ -179,6 +179,12 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
                  "joint-encoders (a diagnostic: the device has 15000)")
       ->check(program::number({100.0, 1e9, false, false, "a number of counts per turn"}))
       ->default_str(fmt::format("{}", OmniParams{}.encoder_counts_per_rev));
+  cmd.add_option("--top-clock", o.top_clock,
+                 "sphere-3dof: how the two PCs keep time, own (the TOP on its own 1 kHz clock at a phase and a drift "
+                 "drawn per seed, packets applied as they arrive) or op-playout (the TOP on the OP's clock the link's "
+                 "nominal delay late, play-out queues: the model before issue 39)")
+      ->transform(program::one_of(kTopClocks))
+      ->default_str(std::string(name(SphereConfig{}.top_clock)));
   cmd.add_option("--driver-cutoff-hz", o.driver_cutoff_hz, "sphere-3dof: the driver's low-pass cut-off, Hz")
       ->check(program::number({0.1, 499.0, false, false, "a cut-off in Hz"}))
       ->default_str(fmt::format("{}", SphereConfig{}.driver_cutoff_hz));
@@ -291,6 +297,8 @@ std::string misplaced_options(const RunOptions& o) {
   if (!sphere && (o.device_velocity || o.driver_cutoff_hz))
     return "--device-velocity and --driver-cutoff-hz belong to sphere-3dof (the levers read encoders)";
   if (!sphere && o.position_sensor) return "--position-sensor belongs to sphere-3dof (the levers read encoders)";
+  if (!sphere && o.top_clock)
+    return "--top-clock belongs to sphere-3dof (the lever scenarios' sites run on the simulation's clock)";
   if (!sphere && o.device_encoder_counts)
     return "--device-encoder-counts belongs to sphere-3dof (the levers' encoders: --encoder-counts)";
   if (o.device_encoder_counts &&

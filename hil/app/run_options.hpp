@@ -28,6 +28,7 @@ struct RunOptions {
   std::optional<double> operator_speed, operator_dwell;
   std::optional<SphereVelocityChain> device_velocity;
   std::optional<SpherePositionSensor> position_sensor;
+  std::optional<SphereTopClock> top_clock;
   std::optional<double> driver_cutoff_hz;
   std::optional<double> device_encoder_counts;
   double rest_repeat_ms = static_cast<double>(fw::LeverConfig{}.rest_repeat);

@@ -56,6 +56,7 @@ SphereConfig sphere_config_from(const SimConfig& run, const RunOptions& options)
   c.velocity_chain = options.device_velocity.value_or(c.velocity_chain);
   c.driver_cutoff_hz = options.driver_cutoff_hz.value_or(c.driver_cutoff_hz);
   c.position_sensor = options.position_sensor.value_or(c.position_sensor);
+  c.top_clock = options.top_clock.value_or(c.top_clock);
   c.device.encoder_counts_per_rev = options.device_encoder_counts.value_or(c.device.encoder_counts_per_rev);
   return c;
 }
@@ -83,6 +84,7 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
       {"mean_speed_mps", r.mean_speed_mps},
       {"packets", {{"velocity", r.velocity_packets}, {"force", r.force_packets}, {"stale", r.stale_packets}}},
       {"nominal_delay_ticks", {{"op_to_top", r.uplink_delay_ticks}, {"top_to_op", r.downlink_delay_ticks}}},
+      {"top_clock", {{"phase_ms", r.top_clock_phase_ms}, {"drift_ppm", r.top_clock_drift_ppm}, {"ticks", r.top_ticks}}},
       {"parameters",
        {{"velocity", codec_json(c.velocity_codec)},
         {"force", codec_json(c.force_codec)},
@@ -94,6 +96,8 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"position_sensor", c.position_sensor == SpherePositionSensor::joint_encoders   ? "joint-encoders"
                             : c.position_sensor == SpherePositionSensor::cartesian_grid ? "cartesian-grid"
                                                                                         : "exact"},
+        {"top_clock", name(c.top_clock)},
+        {"top_clock_drift_ppm_max", c.top_clock_drift_ppm_max},
         {"jnd", c.jnd},
         {"jnd_absolute_n", c.jnd_absolute_n},
         {"substeps", c.substeps},

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sphere_clocks.hpp"
 #include "sphere_device.hpp"
 #include "sphere_metrics.hpp"
 #include "sphere_op.hpp"
@@ -37,6 +38,8 @@ void validate(const SphereConfig& c) {
       !(c.network.loss >= 0.0 && c.network.loss <= 1.0))
     bad("invalid network parameters");
   if (!(c.jnd >= 0.0) || !(c.jnd_absolute_n >= 0.0)) bad("invalid JND");
+  if (!(c.top_clock_drift_ppm_max >= 0.0 && c.top_clock_drift_ppm_max <= 10000.0))
+    bad("the TOP clock's drift range must be in [0, 10000] ppm");
 }
 
 void record(const SphereConfig& c, SphereResult& r, double t, const SphereDevice& device, const SphereOp& op,
@@ -96,26 +99,36 @@ SphereResult run_sphere(const SphereConfig& c) {
   Downlink down(lan, c.seed * 4 + 2);
   SphereDevice device(c);
   const SphereDelays delays = sphere_delays(c.network);
+  const SphereClocks clocks(c, delays);
   SphereOp op(c, device.start(), delays);
-  SphereTop top(c, delays);
-  SphereMetrics metrics(c, delays);
+  SphereTop top(c, delays, clocks);
+  SphereMetrics metrics(c, delays, clocks);
+  const bool own_clock = c.top_clock == SphereTopClock::own;
+  std::uint64_t top_ticks = 0;  // the TOP's ticks run so far: the next is top_ticks
+  std::uint64_t force_in_contact = 0;
+  auto top_step = [&](std::uint64_t j) {
+    top.step(j, up, down);
+    metrics.top_stepped(j, top);
+    if (norm(top.force()) > 0.0) force_in_contact += top.force_sent() ? 1 : 0;
+    ++top_ticks;
+  };
 
   SphereResult r;
   const auto ticks = static_cast<std::uint64_t>(std::llround(c.duration_s / kTick));
   if (c.record_trace && !c.trace_sink) r.trace.reserve(static_cast<std::size_t>(ticks));
-  std::uint64_t velocity_in_contact = 0, force_in_contact = 0;
+  std::uint64_t velocity_in_contact = 0;
   for (std::uint64_t k = 1; k <= ticks; ++k) {
     const double t = static_cast<double>(k) * kTick;
     const Nanos t_ns = static_cast<Nanos>(k) * kTickNs;
+    // On its own clock the TOP runs every tick of its own that falls before this one of the OP's.
+    while (own_clock && clocks.top_tick_ns(top_ticks) < t_ns) top_step(top_ticks);
     device.step(t, op.displayed());
     op.sample(t, t_ns, device.position(), up);
+    metrics.op_sampled(k, op);
     op.display(k, t_ns, down);
-    top.step(k, t, t_ns, up, down);
+    if (!own_clock) top_step(k);
     metrics.step(k, op, top, device.speed());
-    if (norm(top.force()) > 0.0) {
-      velocity_in_contact += op.velocity_sent() ? 1 : 0;
-      force_in_contact += top.force_sent() ? 1 : 0;
-    }
+    if (norm(top.force()) > 0.0) velocity_in_contact += op.velocity_sent() ? 1 : 0;
     if (c.record_trace) record(c, r, t, device, op, top, metrics);
   }
 
@@ -125,6 +138,9 @@ SphereResult run_sphere(const SphereConfig& c) {
   r.velocity_packets = op.packets();
   r.force_packets = top.packets();
   r.stale_packets = up.stale() + down.stale();
+  r.top_clock_phase_ms = clocks.phase_ms();
+  r.top_clock_drift_ppm = clocks.drift_ppm();
+  r.top_ticks = top_ticks;
   r.velocity_packet_rate = static_cast<double>(r.velocity_packets) / static_cast<double>(ticks);
   r.force_packet_rate = static_cast<double>(r.force_packets) / static_cast<double>(ticks);
   r.velocity_contact_rate = static_cast<double>(velocity_in_contact) / static_cast<double>(ticks);

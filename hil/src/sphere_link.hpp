@@ -1,6 +1,7 @@
 #pragma once
-// The sphere-3dof's LAN, one direction at a time: packets in datagrams over a NetworkLink, and at the receiver a
-// playout that hands each packet over once the receiver's clock reaches its sample time.
+// The sphere-3dof's LAN, one direction at a time: packets in datagrams over a NetworkLink, and at the receiver
+// either each packet as it arrives, or a playout that hands each packet over once the receiver's clock reaches its
+// sample time (SphereTopClock::op_playout).
 #include <array>
 #include <cstdint>
 
@@ -75,6 +76,21 @@ class SphereChannel {
       newest_t_ = p.t;
     }
     playout_.release(until, accept);
+  }
+  // Without a play-out: every datagram arrived by t_ns goes to accept(packet, arrival_ns) at once, in arrival order
+  // (one older than the newest is stale: dropped, counted).
+  template <typename Accept>
+  void receive_on_arrival(Nanos t_ns, Accept&& accept) {
+    TimedFrame arrived;
+    while (link_.pop_arrived(t_ns, arrived)) {
+      const Payload& p = table_.at(arrived.frame);
+      if (p.t <= newest_t_) {
+        ++stale_;
+        continue;
+      }
+      newest_t_ = p.t;
+      accept(p, arrived.time);
+    }
   }
   std::uint64_t stale() const { return stale_; }
 

@@ -8,17 +8,29 @@
 
 namespace lever::hil {
 
-SphereMetrics::SphereMetrics(const SphereConfig& c, const SphereDelays& delays) : c_(c), delays_(delays) {
-  if (delays.up_ticks + delays.down_ticks >= static_cast<int>(kHistory))
+SphereMetrics::SphereMetrics(const SphereConfig& c, const SphereDelays& delays, const SphereClocks& clocks)
+    : c_(c), clocks_(clocks) {
+  // Two ticks on top of the round trip: the TOP's tick between the sample and the display, and a tick of slip.
+  if (delays.up_ticks + delays.down_ticks + 2 >= static_cast<int>(kHistory))
     throw std::invalid_argument("sphere-3dof: link delay too long");
+}
+
+void SphereMetrics::op_sampled(std::uint64_t k, const SphereOp& op) { measured_history_[k % kHistory] = op.measured(); }
+
+void SphereMetrics::top_stepped(std::uint64_t j, const SphereTop& top) {
+  top_force_history_[j % kHistory] = top.force();
+  const auto sampled = clocks_.op_tick_heard_by_top(j);
+  if (!top.has_position() || !sampled) return;
+  const double e = norm(difference(top.position(), measured_history_[*sampled % kHistory]));
+  position_sq_ += e * e;
+  position_max_error_ = std::max(position_max_error_, e);
+  ++position_samples_;
 }
 
 void SphereMetrics::step(std::uint64_t k, const SphereOp& op, const SphereTop& top, double device_speed) {
   speed_sum_ += device_speed;
   const Vec3& velocity = op.velocity();
   if (velocity[0] == 0.0 && velocity[1] == 0.0 && velocity[2] == 0.0) ++zero_velocity_;
-  measured_history_[k % kHistory] = op.measured();
-  force_history_[k % kHistory] = top.force();
   const double force_n = norm(top.force());
   if (force_n > 0.0) {
     ++contact_;
@@ -26,33 +38,23 @@ void SphereMetrics::step(std::uint64_t k, const SphereOp& op, const SphereTop& t
   }
   if (force_n > c_.device.max_force_n) ++saturated_;
   add_force(k, op);
-  add_position(k, top);
 }
 
 void SphereMetrics::add_force(std::uint64_t k, const SphereOp& op) {
-  // Against the undistorted system: eq. (11) at the position measured the round trip earlier.
-  const auto round_trip = static_cast<std::uint64_t>(delays_.up_ticks + delays_.down_ticks);
-  reference_ = k > round_trip ? saturate(sphere_force(c_.sphere, measured_history_[(k - round_trip) % kHistory]),
-                                         c_.device.max_force_n)
-                              : Vec3{};
+  // Against the undistorted system: eq. (11) at the position measured at the sample the display rests on.
+  const auto computed = clocks_.top_tick_heard_by_op(k);
+  const auto sampled = computed ? clocks_.op_tick_heard_by_top(*computed) : std::nullopt;
+  reference_ = sampled
+                   ? saturate(sphere_force(c_.sphere, measured_history_[*sampled % kHistory]), c_.device.max_force_n)
+                   : Vec3{};
   const double error = norm(difference(op.displayed(), reference_));
   force_sq_ += error * error;
   if (error > std::max(c_.jnd * norm(reference_), c_.jnd_absolute_n)) ++violations_;
-  // Against the force the TOP computed, the downlink's delay earlier: the force direction's codec alone.
-  const auto downlink = static_cast<std::uint64_t>(delays_.down_ticks);
+  // Against the force the TOP computed at the tick the display rests on: the force direction's codec alone.
   const Vec3 sent_reference =
-      k > downlink ? saturate(force_history_[(k - downlink) % kHistory], c_.device.max_force_n) : Vec3{};
+      computed ? saturate(top_force_history_[*computed % kHistory], c_.device.max_force_n) : Vec3{};
   const double sent_error = norm(difference(op.displayed(), sent_reference));
   if (sent_error > std::max(c_.jnd * norm(sent_reference), c_.jnd_absolute_n)) ++downlink_violations_;
-}
-
-void SphereMetrics::add_position(std::uint64_t k, const SphereTop& top) {
-  if (!top.has_position() || k <= static_cast<std::uint64_t>(delays_.up_ticks)) return;
-  const Vec3& then = measured_history_[(k - static_cast<std::uint64_t>(delays_.up_ticks)) % kHistory];
-  const double e = norm(difference(top.position(), then));
-  position_sq_ += e * e;
-  position_max_error_ = std::max(position_max_error_, e);
-  ++position_samples_;
 }
 
 void SphereMetrics::finish(SphereResult& r, std::uint64_t ticks) const {

@@ -1,6 +1,8 @@
 #include "sphere_op.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "sphere_vec.hpp"
 
@@ -45,10 +47,22 @@ Vec3 SphereOp::measure(const Vec3& tip) const {
 }
 
 void SphereOp::display(std::uint64_t k, Nanos t_ns, Downlink& down) {
-  // Computed as the sample times are, so a sample of this clock's time compares equal to it.
-  const double op_clock = static_cast<double>(static_cast<std::int64_t>(k) - down_ticks_) * kTick;
-  down.receive(t_ns, op_clock, [&](const DownPacket& p) { force_receiver_.receive(p.t, p.force); });
-  const auto reconstructed = force_receiver_.reconstruct(op_clock);
+  std::optional<Vec3> reconstructed;
+  if (c_.top_clock == SphereTopClock::own) {
+    // The TOP's model on the TOP's sample times, evaluated the time elapsed here since the newest update arrived.
+    const double t = static_cast<double>(k) * kTick;
+    down.receive_on_arrival(t_ns, [&](const DownPacket& p, Nanos arrival_ns) {
+      force_receiver_.receive(p.t, p.force);
+      update_t_ = p.t;
+      arrival_ = static_cast<double>(arrival_ns) * 1e-9;
+    });
+    reconstructed = force_receiver_.reconstruct(update_t_ + std::max(0.0, t - arrival_));
+  } else {
+    // Computed as the sample times are, so a sample of this clock's time compares equal to it.
+    const double op_clock = static_cast<double>(static_cast<std::int64_t>(k) - down_ticks_) * kTick;
+    down.receive(t_ns, op_clock, [&](const DownPacket& p) { force_receiver_.receive(p.t, p.force); });
+    reconstructed = force_receiver_.reconstruct(op_clock);
+  }
   displayed_ = saturate(reconstructed ? *reconstructed : Vec3{}, c_.device.max_force_n);
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 // The sphere-3dof's OP: the PC at the device. Every tick it reads the device (the position through its joint
 // encoders and kinematics, omni_kinematics.hpp, the velocity as the driver gives it: device_velocity.hpp), sends the
-// velocity through its deadband, and displays the force the TOP sent, reconstructed on the TOP's clock the link's delay
-// late.
+// velocity through its deadband, and displays the force the TOP sent, reconstructed over the time since its update
+// arrived (with op_playout: on the TOP's clock the link's delay late).
 #include <cstdint>
 
 #include "lever/codec/receiver.hpp"
@@ -39,6 +39,7 @@ class SphereOp {
   DeviceVelocity velocity_;
   bool velocity_sent_ = false;
   std::uint64_t packets_ = 0;
+  double update_t_ = 0.0, arrival_ = 0.0;  // the newest force's sample time (TOP's clock) and arrival (the OP's)
 };
 
 }  // namespace lever::hil

@@ -48,6 +48,16 @@ check "--gauge-chain dad141 in one controller takes the DAD's settings" \
 check "--position-sensor reaches the sphere" jq -e '.parameters.position_sensor == "cartesian-grid"' "$work/s.json"
 "$hil" run --scenario sphere-3dof --duration 0.5 --position-sensor exact --json >"$work/s.json"
 check "--position-sensor exact reaches the sphere" jq -e '.parameters.position_sensor == "exact"' "$work/s.json"
+"$hil" run --scenario sphere-3dof --duration 0.5 --seed 2 --json >"$work/s.json"
+check "the sphere's TOP keeps its own clock by default, at a phase and drift in range" \
+  jq -e '.parameters.top_clock == "own" and .top_clock.phase_ms >= 0 and .top_clock.phase_ms < 1 and
+    (.top_clock.drift_ppm | fabs) <= .parameters.top_clock_drift_ppm_max and .top_clock.drift_ppm != 0' "$work/s.json"
+"$hil" run --scenario sphere-3dof --duration 0.5 --seed 2 --top-clock op-playout --json >"$work/s.json"
+check "--top-clock op-playout reaches the sphere: the OP's clock, no phase, no drift" \
+  jq -e '.parameters.top_clock == "op-playout" and .top_clock.phase_ms == 0 and .top_clock.drift_ppm == 0 and
+    .top_clock.ticks == 500' "$work/s.json"
+expect_bad "a TOP clock unknown" "--top-clock" run --scenario sphere-3dof --top-clock shared
+expect_bad "a TOP clock for a lever" "--top-clock belongs to sphere-3dof" run --top-clock own
 "$hil" run --scenario sphere-3dof --duration 0.5 --device-encoder-counts 150000 --json >"$work/s.json"
 check "--device-encoder-counts reaches the sphere" \
   jq -e '.parameters.device.encoder_counts_per_rev == 150000 and .parameters.position_sensor == "joint-encoders"' \

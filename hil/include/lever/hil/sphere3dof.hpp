@@ -6,6 +6,7 @@
 // docs/hil-model.md ("sphere-3dof") gives every parameter's reason.
 #include <cstdint>
 #include <functional>
+#include <string_view>
 #include <vector>
 
 #include "lever/codec/config.hpp"
@@ -62,6 +63,14 @@ enum class SphereVelocityChain : std::uint8_t { driver, difference };
 // position, unquantized.
 enum class SpherePositionSensor : std::uint8_t { joint_encoders, cartesian_grid, exact };
 
+// How the two PCs keep time (docs/hil-model.md, "The teleoperator's own clock"): the TOP on its own 1 kHz clock, at
+// a phase and a drift drawn per seed, each side applying a packet when it arrives and evaluating the sender's model
+// over its own time elapsed since; or, the model before issue 39, the TOP on the OP's clock the link's nominal delay
+// late with play-out queues at both receivers.
+enum class SphereTopClock : std::uint8_t { own, op_playout };
+inline constexpr SphereTopClock kAllTopClocks[] = {SphereTopClock::own, SphereTopClock::op_playout};
+constexpr std::string_view name(SphereTopClock clock) { return clock == SphereTopClock::own ? "own" : "op-playout"; }
+
 struct SphereTraceRow {
   double t = 0.0;
   Vec3 position{};  // the device's tip (true)
@@ -87,6 +96,10 @@ struct SphereConfig {
   SpherePositionSensor position_sensor = SpherePositionSensor::joint_encoders;
   SphereVelocityChain velocity_chain = SphereVelocityChain::driver;
   double driver_cutoff_hz = 20.0;  // the driver's low-pass (the ROS driver's 20 Hz)
+  SphereTopClock top_clock = SphereTopClock::own;
+  // The TOP's clock against the OP's, drawn per seed with top_clock own: a drift uniform in +-this (two PC clocks
+  // of +-100 ppm each) and a phase uniform in [0, 1 ms).
+  double top_clock_drift_ppm_max = 200.0;
   HandParams hand{};
   SphereParams sphere{};
   double jnd = 0.1;              // Weber fraction of the distortion metric
@@ -128,6 +141,9 @@ struct SphereResult {
   int uplink_delay_ticks = 0;        // the link's nominal delay, OP -> TOP and TOP -> OP, in ticks
   int downlink_delay_ticks = 0;
   std::uint64_t stale_packets = 0;  // arrived after a newer one (dropped)
+  // The TOP's clock as drawn (zero with op_playout): its first tick's time on the OP's clock, and its drift.
+  double top_clock_phase_ms = 0.0, top_clock_drift_ppm = 0.0;
+  std::uint64_t top_ticks = 0;
   double realtime_factor = 0.0;
   double wall_time_s = 0.0;
   std::vector<SphereTraceRow> trace;
