@@ -107,6 +107,40 @@ for role in hsi top; do
   check "example $role.toml: the printed configuration loads back to itself" cmp -s "$work/$role.toml" "$work/$role.again"
   check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
 done
+# --get KEY: one key's effective value, as the shell tests read a configuration (no TOML parsing of their own).
+check "--get a number" test "$("$fw" --config "$examples/top.toml" --get control.position.kp_nm_per_rad)" = 40.0
+check "--get a string, bare" test "$("$fw" --config "$examples/top.toml" --get lever.role)" = top
+check "--get a key the file leaves out: its default" \
+  test "$("$fw" --config "$work/empty.toml" --role hsi --get link.heartbeat_ms)" = 25
+check "--get an empty string: an empty line" test "$("$fw" --config "$examples/top.toml" --get board.watchdog.device)" = ""
+getset_bad() {  # NAME EXPECTED_MESSAGE ARGS...
+  local name=$1 expected=$2; shift 2
+  "$fw" --config "$examples/top.toml" "$@" >"$work/out" 2>"$work/err"
+  local code=$?
+  check "$name: exit code 2 (got $code)" test "$code" -eq 2
+  check "$name: says '$expected' (got: $(cat "$work/err"))" grep -qF -- "$expected" "$work/err"
+  check "$name: prints nothing on stdout" test ! -s "$work/out"
+}
+getset_bad "--get an unknown key" "--get: no key 'control.position.kq'" --get control.position.kq
+getset_bad "--get with --check-config" "excludes" --get lever.role --check-config
+# --set KEY=VALUE: a key overridden after the file, checked as in the file, in order; --role and --can after it.
+check "--set a number" test "$("$fw" --config "$examples/top.toml" --set codec.motion.p=0.05 --get codec.motion.p)" = 0.05
+check "--set twice: the last wins" \
+  test "$("$fw" --config "$examples/top.toml" --set codec.motion.p=0.05 --set codec.motion.p=0.07 --get codec.motion.p)" = 0.07
+check "--set a string" \
+  test "$("$fw" --config "$examples/top.toml" --set 'board.can.interface="vcan3"' --get board.can.interface)" = vcan3
+check "--can after --set" \
+  test "$("$fw" --config "$examples/top.toml" --set 'board.can.interface="vcan3"' --can vcan4 --get board.can.interface)" = vcan4
+"$fw" --config "$examples/top.toml" --set board.motor.pwm_chip=3 --check-config >"$work/set.toml"
+check "--set then --check-config: a configuration that loads back with the key set" \
+  test "$("$fw" --config "$work/set.toml" --get board.motor.pwm_chip)" = 3
+getset_bad "--set out of range" "--set: link.comms_timeout_ms: must be a whole number in [1, 60000], got 0" \
+  --set link.comms_timeout_ms=0 --check-config
+getset_bad "--set a string without its quotes" "is no TOML value (a string needs its quotes" \
+  --set board.can.interface=vcan3 --check-config
+getset_bad "--set an unknown key" "--set: codec.motion.q: unknown key" --set codec.motion.q=1 --check-config
+getset_bad "--set without =" "expected KEY=VALUE" --set codec.motion.p --check-config
+getset_bad "--set a wrong type" "--set: lever.pair: must be a whole number" --set 'lever.pair="one"' --check-config
 # The examples are every key at its default: they cannot drift from the program.
 for role in hsi top; do
   "$fw" --config "$work/empty.toml" --role "$role" --check-config | sed 1d >"$work/defaults.$role"

@@ -20,19 +20,19 @@ board_devices() {
 }
 
 # write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: the installed /etc/lever/ROLE.toml with this board's
-# devices (and the given keys) changed; $work/ROLE.toml is the same file, for serve and the bounds
+# devices (and the given keys, VALUE a TOML value) changed, as lever-fw resolves it (--set, --check-config);
+# $work/ROLE.toml is the same file, for serve and the bounds
 write_config() {
   local role=$1 can=$2 file=$work/$1.toml; shift 2
   cp "/etc/lever/$role.toml" "$work/$role.example"
-  cp "$work/$role.example" "$file"
-  set_key "$file" board.can interface "\"$can\"" &&
-    set_key "$file" board.encoder chip "\"$role\"" &&
-    set_key "$file" board.motor line_chip "\"$role\"" || exit 1
-  [[ $role == top ]] && { set_key "$file" board.motor pwm_chip "$(pwm_chip top)" || exit 1; }
-  while (($# >= 3)); do set_key "$file" "$1" "$2" "$3" || exit 1; shift 3; done
+  local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role\"")
+  [[ $role == top ]] && sets+=(--set "board.motor.pwm_chip=$(pwm_chip top)")
+  while (($# >= 3)); do sets+=(--set "$1.$2=$3"); shift 3; done
+  lever-fw --config "$work/$role.example" "${sets[@]}" --check-config >"$file" ||
+    { echo "FAILED: lever-fw refused $role.toml's keys: ${sets[*]}" >&2; exit 1; }
   install -m 0644 "$file" "/etc/lever/$role.toml"
   echo "/etc/lever/$role.toml differs from the example in:"
-  diff "$work/$role.example" "$file" | sed -n 's/^> /  /p'
+  diff <(lever-fw --config "$work/$role.example" --check-config | sed 1d) <(sed 1d "$file") | sed -n 's/^> /  /p'
 }
 
 # journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.

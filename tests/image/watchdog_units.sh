@@ -42,9 +42,9 @@ dev=/sys/class/watchdog/watchdog0
 require "/dev/watchdog0 is QEMU's i6300esb ($(cat $dev/identity 2>/dev/null)), active ($(cat $dev/state 2>/dev/null)), timeout $(cat $dev/timeout 2>/dev/null) s" \
   test "$(cat $dev/identity 2>/dev/null)" = "i6300ESB timer" -a "$(cat $dev/state 2>/dev/null)" = active
 # watchdog_device ROLE: board.watchdog.device of its configuration
-watchdog_device() { awk '/^\[/ { s = ($1 == "[board.watchdog]") } s && $1 == "device" { print $3; exit }' "/etc/lever/$1.toml"; }
+watchdog_device() { /usr/bin/lever-fw --config "/etc/lever/$1.toml" --get board.watchdog.device; }
 check "the pair runs under its units meanwhile ($(systemctl is-active lever-fw@hsi lever-fw@top | tr '\n' ' ')), board.watchdog.device empty in both ($(watchdog_device hsi) $(watchdog_device top))" \
-  test "$(systemctl is-active lever-fw@hsi lever-fw@top | tr '\n' ' ')/$(watchdog_device hsi)/$(watchdog_device top)" = "active active /''/''"
+  test "$(systemctl is-active lever-fw@hsi lever-fw@top | tr '\n' ' ')/$(watchdog_device hsi)/$(watchdog_device top)" = "active active //"
 # Nothing feeds it from here: the kernel panics and, told not to reboot, spins.
 echo "$EPOCHREALTIME $timeout_s" >"$share/watchdog-phase"
 sync

@@ -63,36 +63,26 @@ pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, n
   done
 }
 
-# set_key FILE SECTION KEY VALUE: the key's value in that [SECTION] of a TOML file (the key must be there)
-set_key() {
-  local file=$1 section=$2 key=$3 value=$4
-  awk -v section="[$2]" -v key="$3" -v value="$4" '
-    /^\[/ { in_section = ($1 == section) }
-    in_section && $1 == key && $2 == "=" { print key " = " value; found = 1; next }
-    { print }
-    END { exit !found }' "$file" >"$file.new" || { echo "FAILED: $file has no $key in [$section]" >&2; return 1; }
-  mv "$file.new" "$file"
-}
-
 # write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: $work/ROLE.toml, the example config with the devices
-# of this guest and the given keys changed; prints every key that differs from the example
+# of this guest and the given keys changed (VALUE a TOML value), as lever-fw resolves it (--set, --check-config: each
+# key checked as in a file, every key written out); prints every key that differs from the example
 write_config() {
   local role=$1 can=$2 file=$work/$1.toml; shift 2
-  cp "$examples/$role.toml" "$file"
-  set_key "$file" board.can interface "\"$can\"" &&
-    set_key "$file" board.encoder chip "\"$role\"" &&
-    set_key "$file" board.motor line_chip "\"$role\"" || exit 1
-  [[ $role == top ]] && { set_key "$file" board.motor pwm_chip "$(pwm_chip top)" || exit 1; }
-  while (($# >= 3)); do set_key "$file" "$1" "$2" "$3" || exit 1; shift 3; done
+  local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role\"")
+  [[ $role == top ]] && sets+=(--set "board.motor.pwm_chip=$(pwm_chip top)")
+  while (($# >= 3)); do sets+=(--set "$1.$2=$3"); shift 3; done
+  "$bin/lever-fw" --config "$examples/$role.toml" "${sets[@]}" --check-config >"$file" ||
+    { echo "FAILED: lever-fw refused $role.toml's keys: ${sets[*]}" >&2; exit 1; }
   echo "$role.toml differs from the example in:"
-  diff "$examples/$role.toml" "$file" | sed -n 's/^> /  /p'
+  diff <("$bin/lever-fw" --config "$examples/$role.toml" --check-config | sed 1d) <(sed 1d "$file") | sed -n 's/^> /  /p'
 }
 
-# key ROLE SECTION KEY: a figure of the lever's configuration ($work/ROLE.toml), which the bounds come from
-key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$work/$1.toml"; }
+# key ROLE SECTION KEY: a figure of the lever's configuration ($work/ROLE.toml), which the bounds come from, as
+# lever-fw resolves it (its default where the file leaves the key out)
+key() { "$bin/lever-fw" --config "$work/$1.toml" --get "$2.$3"; }
 # example_key ROLE SECTION KEY: the same figure of the example configuration the lever's was made from (what ships),
 # for a bound that must not follow a lever configured otherwise
-example_key() { awk -v section="[$2]" -v key="$3" '/^\[/ { s = ($1 == section) } s && $1 == key { print $3; exit }' "$examples/$1.toml"; }
+example_key() { "$bin/lever-fw" --config "$examples/$1.toml" --get "$2.$3"; }
 
 # one_site NAME SERVE_ARGS...: both levers on one bus (the TOP's gauge on Modbus TCP), candump logging the HSI's
 # interface to $out/NAME.candump, serve started, then both lever-fw. The bus is vcan0 for both, or with
@@ -306,8 +296,7 @@ pwm_hw() { cat "/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state"; 
 pin_inactive() {
   local inverted=inverted_$1
   if [[ -z ${!inverted:-} ]]; then
-    printf -v "$inverted" '%s' "$(awk '/^\[/ { s = ($1 == "[board.motor]") } s && $1 == "pwm_inversed" { v = $3 }
-      END { print (v == "true" ? "true" : "false") }' "$work/$1.toml")"
+    printf -v "$inverted" '%s' "$(key "$1" board.motor pwm_inversed)"
   fi
   if [[ ${!inverted} == true ]]; then [[ $2 == 1000000 ]]; else [[ $2 == 0 ]]; fi
 }

@@ -228,6 +228,29 @@ std::vector<std::string> ConfigSchema::keys(std::string_view prefix) const {
   return out;
 }
 
+std::optional<std::string> ConfigSchema::load_assignment(std::string_view assignment, const std::string& source) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string_view::npos || eq == 0)
+    return fmt::format("{}: '{}': expected KEY=VALUE, VALUE a TOML value (\"vcan0\", 0.05, true)", source,
+                       printable(assignment));
+  const std::string key(assignment.substr(0, eq));
+  const std::string text(assignment.substr(eq + 1));
+  toml::table parsed;
+  try {
+    parsed = toml::parse("v = " + text);
+  } catch (const toml::parse_error&) {
+    return fmt::format("{}: {}: '{}' is no TOML value (a string needs its quotes: \"vcan0\")", source, printable(key),
+                       printable(text));
+  }
+  return load_value(key, *parsed.get("v"), source);
+}
+
+std::optional<std::string> ConfigSchema::value(std::string_view key) const {
+  const auto it = index_.find(key);
+  if (it == index_.end()) return std::nullopt;
+  return fields_[it->second].print();
+}
+
 std::optional<std::string> ConfigSchema::load_value(const std::string& key, const toml::node& value,
                                                     const std::string& source) {
   const auto it = index_.find(key);

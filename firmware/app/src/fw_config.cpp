@@ -320,6 +320,12 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
     out.error = *e;
     return out;
   }
+  for (const auto& assignment : overrides.sets) {
+    if (auto e = schema.load_assignment(assignment, "--set")) {
+      out.error = *e;
+      return out;
+    }
+  }
   if (overrides.role) out.config.lever.role = *overrides.role;
   if (overrides.can) {
     if (auto e = schema.load_value("board.can.interface", toml::value<std::string>(*overrides.can), "--can")) {

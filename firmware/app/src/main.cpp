@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "lever/app/board_runner.hpp"
 #include "lever/app/fw_config.hpp"
@@ -16,6 +17,7 @@
 #include "lever/platform/motor_guard.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/parse.hpp"
+#include "lever/program/text.hpp"
 
 namespace {
 
@@ -43,16 +45,28 @@ int main(int argc, char** argv) {
       ->transform(program::one_of(
           program::Choices<protocol::Role>{{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}}));
   app.add_option("--can", can, "override board.can.interface");
+  std::vector<std::string> sets;
+  app.add_option("--set", sets,
+                 "override one key, KEY=VALUE with VALUE a TOML value (--set codec.motion.p=0.05 --set "
+                 "'board.can.interface=\"vcan0\"'), checked as in the file; repeatable, applied in order after the "
+                 "file, before --role and --can")
+      ->take_all()
+      ->allow_extra_args(false);
   app.add_flag("--check-config", check_config, "validate the configuration and print it, touching no hardware");
+  std::string get_key;
+  app.add_option("--get", get_key,
+                 "validate the configuration and print one key's effective value (a string without its quotes), "
+                 "touching no hardware: --get control.position.kp_nm_per_rad")
+      ->excludes("--check-config");
   app.add_flag("--stats-json", stats_json, "one JSON status object per line, once a second");
   app.add_flag("--motor-off", motor_off,
                "stop the board's motor (PWM at duty 0 and enabled, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
-      ->excludes("--check-config");
+      ->excludes("--check-config", "--get");
   app.add_flag("--kernel-check", kernel_check,
                "say which preemption model the kernel runs (the loop needs full or PREEMPT_RT) and exit 0: the "
                "service's ExecStartPre, unsandboxed, where lever-fw itself cannot read /proc/cmdline")
-      ->excludes("--check-config", "--motor-off");
+      ->excludes("--check-config", "--motor-off", "--get");
   app.add_option("--motor-state", motor_state,
                  "a file naming the motor and the run: written at start, before the motor is opened; with it, "
                  "--motor-off stops that motor only, and under systemd only its own invocation's (the service: "
@@ -69,12 +83,29 @@ int main(int argc, char** argv) {
 
   std::optional<std::string> can_override;
   if (app.count("--can") > 0) can_override = can;
-  auto loaded = app::load_fw_config(config_path, {role, can_override});
+  auto loaded = app::load_fw_config(config_path, {role, can_override, sets});
   if (!loaded.error.empty()) {
     fmt::print(stderr, "lever-fw: {}\n", loaded.error);
     return kBadInput;
   }
   auto& config = loaded.config;
+  if (app.count("--get") > 0) {
+    const auto value = app::schema_for(config).value(get_key);
+    if (!value) {
+      fmt::print(stderr, "lever-fw: --get: no key '{}' (every key: lever-fw --config FILE --check-config)\n",
+                 program::printable(get_key));
+      return kBadInput;
+    }
+    // A string bare, for a shell's use; every other TOML value is its own text. The text is the schema's own
+    // printing, so it parses; were it not to, it is printed as it is.
+    std::optional<std::string> bare;
+    try {
+      bare = toml::parse("v = " + *value)["v"].value<std::string>();
+    } catch (const toml::parse_error&) {
+    }
+    fmt::print("{}\n", bare.value_or(*value));
+    return 0;
+  }
   if (check_config) {
     fmt::print("# lever-fw: {} is valid; the effective configuration:\n{}", config_path,
                app::schema_for(config).print());

@@ -93,6 +93,13 @@ class ConfigSchema {
   // The dotted keys that start with `prefix`, in the schema's order.
   std::vector<std::string> keys(std::string_view prefix) const;
 
+  // "KEY=VALUE" from elsewhere (a command line's --set), VALUE a TOML value, through the same check as in a file.
+  // Returns "SOURCE: KEY: problem", or "SOURCE: 'TEXT': ..." when it is no KEY=VALUE or VALUE no TOML value.
+  std::optional<std::string> load_assignment(std::string_view assignment, const std::string& source);
+
+  // One key's effective value as a TOML value ("tcp" quoted, 25, true); nothing for a key the schema lacks.
+  std::optional<std::string> value(std::string_view key) const;
+
   // The effective configuration as a TOML document, every key with its unit and documentation; with a prefix
   // ("board.motor."), only the keys that start with it.
   std::string print(std::string_view prefix = {}) const;

@@ -3,6 +3,7 @@
 // TOML file whose keys carry their units (docs/lever-fw.md lists them with defaults).
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "lever/app/config_schema.hpp"
 #include "lever/fw/lever_config.hpp"
@@ -98,6 +99,9 @@ ConfigSchema schema_for(FwConfig& config);
 struct ConfigOverrides {
   std::optional<protocol::Role> role;  // --role: lever.role
   std::optional<std::string> can;      // --can: board.can.interface
+  // --set KEY=VALUE, in order, after the file and before --role and --can: VALUE is a TOML value ("vcan0" quoted,
+  // 0.05, true), checked as the key is in a file.
+  std::vector<std::string> sets;
 };
 
 // Loads `path` over the defaults, then the overrides. On failure: the message naming file, key and problem
