@@ -51,10 +51,11 @@ AllowList AllowList::parse(std::string_view text) {
 }
 
 AllowList AllowList::lever_protocol() {
-  using namespace protocol;
-  return parse(fmt::format("0x{:X}-0x{:X},0x{:X}-0x{:X},0x{:X}-0x{:X}", kCommandBase, kCommandBase + kPairCount - 1,
-                           kMotionBase, kSettingsBase + 2 * kPairCount - 1, kHeartbeatBase,
-                           kHeartbeatBase + 2 * kPairCount - 1));
+  // Every identifier of the message set, written as the option would take it.
+  std::string ranges;
+  for (const auto& m : protocol::kMessageSet)
+    ranges += fmt::format("{}0x{:X}-0x{:X}", ranges.empty() ? "" : ",", m.base, m.base + protocol::id_count(m) - 1);
+  return parse(ranges);
 }
 
 std::string AllowList::describe() const {

@@ -24,25 +24,6 @@ constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
 // Longer is no session: its timeline (every 10 ms) would take gigabytes.
 constexpr double kMaxSpan = 86400.0;
 
-std::string message_name(const proto::FrameAddress& a) {
-  const bool top = a.role == proto::Role::top;
-  switch (a.kind) {
-    case proto::MessageKind::command:
-      return "LeverCommand";
-    case proto::MessageKind::motion:
-      return "LeverMotion";
-    case proto::MessageKind::force:
-      return "LeverForce";
-    case proto::MessageKind::energy:
-      return top ? "LeverEnergyTop" : "LeverEnergyHsi";
-    case proto::MessageKind::settings:
-      return top ? "LeverSettingsTop" : "LeverSettingsHsi";
-    case proto::MessageKind::heartbeat:
-      return top ? "LeverHeartbeatTop" : "LeverHeartbeatHsi";
-  }
-  return "?";
-}
-
 // "force: predictive p 0.1000 floor 0.050 N filter 30.0 Hz (changes 2, tares 1)": a lever's settings frame, read.
 std::string settings_text(const proto::SettingsMessage& m, bool top) {
   std::string filter = m.filter_hz == 0 ? "off" : fmt::format("{:.1f} Hz", m.filter_hz * proto::kFilterHzLsb);
@@ -149,7 +130,7 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
       ++s.other_frames;
       continue;
     }
-    const std::string name = message_name(a);
+    const std::string name(proto::message_name(a));
     std::string row = fmt::format("{:.6f},{},{},{},", t, lf.iface, name, a.pair);
     proto::DecodeError e = proto::DecodeError::none;
     int sender = -1;

@@ -14,20 +14,19 @@ namespace lever::platform {
 
 namespace {}  // namespace
 
-std::array<CanFilter, 7> lever_pair_filters(std::uint8_t pair) noexcept {
+std::array<CanFilter, lever_heard_id_count()> lever_pair_filters(std::uint8_t pair) noexcept {
   // The flags in the mask must match the id's (zero): an extended or remote frame with the same 11 low bits
-  // is someone else's. The energy frames pass: the passivity observer adds what its peer's port passed on (the
-  // lever's own does not come back: the socket does not receive its own frames). The peer's settings frames stay
-  // out: they are for hosts, and a lever follows its peer's settings by the mode on every data frame.
+  // is someone else's. The lever's own frames do not come back: the socket does not receive its own.
   constexpr std::uint32_t mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
   using protocol::Role;
-  return {{{protocol::command_id(pair), mask},
-           {protocol::motion_id(pair), mask},
-           {protocol::force_id(pair), mask},
-           {protocol::energy_id(pair, Role::hsi), mask},
-           {protocol::energy_id(pair, Role::top), mask},
-           {protocol::heartbeat_id(pair, Role::hsi), mask},
-           {protocol::heartbeat_id(pair, Role::top), mask}}};
+  std::array<CanFilter, lever_heard_id_count()> filters{};
+  std::size_t n = 0;
+  for (const auto& m : protocol::kMessageSet) {
+    if (!m.lever_hears) continue;
+    filters[n++] = {protocol::message_id(m.kind, pair, m.per_sender ? Role::hsi : m.sender), mask};
+    if (m.per_sender) filters[n++] = {protocol::message_id(m.kind, pair, Role::top), mask};
+  }
+  return filters;
 }
 
 Result<BoardCanPort> BoardCanPort::open(const BoardCanPortConfig& config) {

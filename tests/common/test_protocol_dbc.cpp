@@ -172,3 +172,33 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
                  {"FilterHz", c.filter_hz * kFilterHzLsb}});
   }
 }
+
+TEST_CASE("the message set's table is the DBC's messages, and classify reads every id back", "[protocol][dbc]") {
+  const auto dbc = parse_dbc(LEVER_DBC_PATH);
+  std::map<std::string, std::uint32_t> from_table;
+  for (const auto& m : kMessageSet) {
+    REQUIRE(&message_spec(m.kind) == &m);  // one row a kind
+    from_table[std::string(m.name)] = message_id(m.kind, 0, m.per_sender ? Role::hsi : m.sender);
+    if (m.per_sender) from_table[std::string(m.top_name)] = message_id(m.kind, 0, Role::top);
+    for (std::uint32_t id = m.base; id < m.base + id_count(m); ++id) {
+      FrameAddress a;
+      REQUIRE(classify(id, a) == DecodeError::none);
+      CHECK(a.kind == m.kind);
+      CHECK(message_id(a.kind, a.pair, a.role) == id);
+      CHECK(message_name(a) == (m.per_sender && a.role == Role::top ? m.top_name : m.name));
+    }
+  }
+  // The DBC describes pair 0: each of its messages is the table's, at the table's id, and no other.
+  std::map<std::string, std::uint32_t> from_dbc;
+  for (const auto& [name, message] : dbc) from_dbc[name] = message.id;
+  CHECK(from_table == from_dbc);
+  // No two rows share an id, and every other classic id is no lever message.
+  std::size_t ids = 0;
+  for (std::uint32_t id = 0; id <= kMaxStandardId; ++id) {
+    FrameAddress a;
+    ids += classify(id, a) == DecodeError::none ? 1 : 0;
+  }
+  std::size_t expected = 0;
+  for (const auto& m : kMessageSet) expected += id_count(m);
+  CHECK(ids == expected);
+}

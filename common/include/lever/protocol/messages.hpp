@@ -26,19 +26,6 @@ constexpr std::uint32_t kEnergyBase = 0x120;     // 0x120 + 2 * pair + role: a d
 constexpr std::uint32_t kSettingsBase = 0x140;   // 0x140 + 2 * pair + role: the settings of the direction it sends
 constexpr std::uint32_t kHeartbeatBase = 0x700;  // 0x700 + 2 * pair + role
 
-constexpr std::uint32_t command_id(std::uint8_t pair) noexcept { return kCommandBase + pair; }
-constexpr std::uint32_t motion_id(std::uint8_t pair) noexcept { return kMotionBase + pair; }
-constexpr std::uint32_t force_id(std::uint8_t pair) noexcept { return kForceBase + pair; }
-constexpr std::uint32_t energy_id(std::uint8_t pair, Role role) noexcept {
-  return kEnergyBase + 2u * pair + static_cast<std::uint32_t>(role);
-}
-constexpr std::uint32_t settings_id(std::uint8_t pair, Role role) noexcept {
-  return kSettingsBase + 2u * pair + static_cast<std::uint32_t>(role);
-}
-constexpr std::uint32_t heartbeat_id(std::uint8_t pair, Role role) noexcept {
-  return kHeartbeatBase + 2u * pair + static_cast<std::uint32_t>(role);
-}
-
 // Stable numbers: they are counted and reported.
 enum class DecodeError : std::uint8_t {
   none = 0,
@@ -49,6 +36,56 @@ enum class DecodeError : std::uint8_t {
 
 enum class MessageKind : std::uint8_t { command, motion, force, energy, settings, heartbeat };
 
+// The message set, a row a message: its block of identifiers (one per pair, or one per pair and sender), its names
+// in common/protocol/lever.dbc, and whether a lever's board hears it. The identifiers, classify(), the board's CAN
+// filters (platform::lever_pair_filters), the bridge's default allow list and the tools' message names are all read
+// from here; tests/common/test_protocol_dbc.cpp holds it to the DBC.
+struct MessageSpec {
+  MessageKind kind;
+  std::uint32_t base;
+  bool per_sender;                  // base + 2 * pair + role; otherwise base + pair
+  Role sender;                      // who sends it when it is not per sender (a command: a host, addressed as the HSI)
+  std::string_view name, top_name;  // the DBC's message names: the HSI's (or the only one) and the TOP's
+  // A lever's board passes it. The energy frames do: the passivity observer adds what its peer's port passed on.
+  // The settings frames do not: they are for hosts, and a lever follows its peer's settings by the mode on every
+  // data frame.
+  bool lever_hears;
+};
+inline constexpr MessageSpec kMessageSet[] = {
+    {MessageKind::command, kCommandBase, false, Role::hsi, "LeverCommand", "", true},
+    {MessageKind::motion, kMotionBase, false, Role::hsi, "LeverMotion", "", true},
+    {MessageKind::force, kForceBase, false, Role::top, "LeverForce", "", true},
+    {MessageKind::energy, kEnergyBase, true, Role::hsi, "LeverEnergyHsi", "LeverEnergyTop", true},
+    {MessageKind::settings, kSettingsBase, true, Role::hsi, "LeverSettingsHsi", "LeverSettingsTop", false},
+    {MessageKind::heartbeat, kHeartbeatBase, true, Role::hsi, "LeverHeartbeatHsi", "LeverHeartbeatTop", true},
+};
+
+constexpr const MessageSpec& message_spec(MessageKind kind) noexcept {
+  for (const auto& m : kMessageSet)
+    if (m.kind == kind) return m;
+  return kMessageSet[0];  // every kind has its row (tests/common/test_protocol_dbc.cpp)
+}
+// How many identifiers a message takes on the bus: one per pair, or one per pair and sender.
+constexpr std::uint32_t id_count(const MessageSpec& m) noexcept { return (m.per_sender ? 2u : 1u) * kPairCount; }
+// The identifier of a message of a pair; the role counts only for a message per sender.
+constexpr std::uint32_t message_id(MessageKind kind, std::uint8_t pair, Role role = Role::hsi) noexcept {
+  const auto& m = message_spec(kind);
+  return m.per_sender ? m.base + 2u * pair + static_cast<std::uint32_t>(role) : m.base + pair;
+}
+
+constexpr std::uint32_t command_id(std::uint8_t pair) noexcept { return message_id(MessageKind::command, pair); }
+constexpr std::uint32_t motion_id(std::uint8_t pair) noexcept { return message_id(MessageKind::motion, pair); }
+constexpr std::uint32_t force_id(std::uint8_t pair) noexcept { return message_id(MessageKind::force, pair); }
+constexpr std::uint32_t energy_id(std::uint8_t pair, Role role) noexcept {
+  return message_id(MessageKind::energy, pair, role);
+}
+constexpr std::uint32_t settings_id(std::uint8_t pair, Role role) noexcept {
+  return message_id(MessageKind::settings, pair, role);
+}
+constexpr std::uint32_t heartbeat_id(std::uint8_t pair, Role role) noexcept {
+  return message_id(MessageKind::heartbeat, pair, role);
+}
+
 struct FrameAddress {
   MessageKind kind{};
   std::uint8_t pair = 0;
@@ -58,25 +95,20 @@ struct FrameAddress {
 
 // What an identifier means, or unknown_id.
 constexpr DecodeError classify(std::uint32_t id, FrameAddress& out) noexcept {
-  if (id >= kCommandBase && id < kCommandBase + kPairCount) {
-    out = {MessageKind::command, static_cast<std::uint8_t>(id - kCommandBase), Role::hsi};
-  } else if (id >= kMotionBase && id < kMotionBase + kPairCount) {
-    out = {MessageKind::motion, static_cast<std::uint8_t>(id - kMotionBase), Role::hsi};
-  } else if (id >= kForceBase && id < kForceBase + kPairCount) {
-    out = {MessageKind::force, static_cast<std::uint8_t>(id - kForceBase), Role::top};
-  } else if (id >= kEnergyBase && id < kEnergyBase + 2u * kPairCount) {
-    const auto offset = id - kEnergyBase;
-    out = {MessageKind::energy, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
-  } else if (id >= kSettingsBase && id < kSettingsBase + 2u * kPairCount) {
-    const auto offset = id - kSettingsBase;
-    out = {MessageKind::settings, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
-  } else if (id >= kHeartbeatBase && id < kHeartbeatBase + 2u * kPairCount) {
-    const auto offset = id - kHeartbeatBase;
-    out = {MessageKind::heartbeat, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)};
-  } else {
-    return DecodeError::unknown_id;
+  for (const auto& m : kMessageSet) {
+    if (id < m.base || id >= m.base + id_count(m)) continue;
+    const std::uint32_t offset = id - m.base;
+    out = m.per_sender ? FrameAddress{m.kind, static_cast<std::uint8_t>(offset / 2), static_cast<Role>(offset % 2)}
+                       : FrameAddress{m.kind, static_cast<std::uint8_t>(offset), m.sender};
+    return DecodeError::none;
   }
-  return DecodeError::none;
+  return DecodeError::unknown_id;
+}
+
+// A frame's message name in the DBC ("LeverHeartbeatTop").
+constexpr std::string_view message_name(const FrameAddress& a) noexcept {
+  const auto& m = message_spec(a.kind);
+  return m.per_sender && a.role == Role::top ? m.top_name : m.name;
 }
 
 // ---- Scaling (docs/can-protocol.md justifies each choice) ----

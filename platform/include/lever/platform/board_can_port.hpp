@@ -5,6 +5,7 @@
 // counts it; an interface that goes down, or away and back, is followed without blocking the loop. After
 // open(), receive() and send() never block and never allocate.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
 
@@ -13,12 +14,22 @@
 #include "lever/platform/can_bus_monitor.hpp"
 #include "lever/platform/result.hpp"
 #include "lever/platform/socketcan.hpp"
+#include "lever/protocol/messages.hpp"
 
 namespace lever::platform {
 
-// The kernel filters of a lever pair: its command, motion and force frames and both roles' heartbeats, as
-// classic 11-bit data frames (extended and remote frames with the same low bits do not pass).
-std::array<CanFilter, 7> lever_pair_filters(std::uint8_t pair) noexcept;
+// How many identifiers of a pair a lever hears: the message set's rows it hears, per sender where the row is.
+constexpr std::size_t lever_heard_id_count() noexcept {
+  std::size_t n = 0;
+  for (const auto& m : protocol::kMessageSet)
+    if (m.lever_hears) n += m.per_sender ? 2 : 1;
+  return n;
+}
+
+// The kernel filters of a lever pair: every identifier of the pair the message set says a lever hears
+// (protocol::MessageSpec::lever_hears), as classic 11-bit data frames (extended and remote frames with the same low
+// bits do not pass).
+std::array<CanFilter, lever_heard_id_count()> lever_pair_filters(std::uint8_t pair) noexcept;
 
 struct BoardCanStats {
   std::uint64_t rx_frames = 0;        // data frames handed to the core
