@@ -33,6 +33,9 @@ refuses "scripts/build-mcu with a second argument" "'extra'" "$root/scripts/buil
 refuses "scripts/build --target without a name" "--target" "$root/scripts/build" "$work/never-built" --target
 refuses "scripts/bench-bridge --frames two" "'two'" "$root/scripts/bench-bridge" --frames two
 refuses "scripts/bench-bridge --variants old without --old" "needs --old" "$root/scripts/bench-bridge" --variants old "$root"
+refuses "scripts/bench-bridge --variants floor without the floor relay" "no lever-bench-relay-floor" \
+  "$root/scripts/bench-bridge" --variants floor "$root"
+refuses "scripts/bench-bridge --variants ceiling" "'ceiling'" "$root/scripts/bench-bridge" --variants ceiling "$root"
 refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
 refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
 refuses "scripts/cpu-budget --shifts 5" "'5'" "$root/scripts/cpu-budget" --shifts 5

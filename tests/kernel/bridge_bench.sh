@@ -4,7 +4,11 @@
 #   cangw              the in-kernel can-gw (cangw -A -s vcan0 -d vcan1 -e), the floor;
 #   new, new-norec     BIN_DIR's lever-bridge pair (vcan0 -> UDP loopback -> vcan1), recorder on and off;
 #   new-rt0            the same, recorder on, --realtime-priority 0 (what real time buys);
-#   old, old-norec     OLD_BIN_DIR's lever-bridge pair, when given, as it runs by default.
+#   old, old-norec     OLD_BIN_DIR's lever-bridge pair, when given, as it runs by default;
+#   floor              BIN_DIR's lever-bench-relay-floor pair: the same hops (vcan0 -> UDP loopback -> vcan1, two
+#                      processes, SCHED_FIFO 40) with nothing else, the floor of any such user-space relay;
+#   floor-hmac         the same with the bridge's datagram encoded and verified (precomputed HMAC state).
+# The floor variants are in the default set when BIN_DIR has lever-bench-relay-floor (a build with benchmarks).
 # cangen sends each block's frames at 1 kHz with a block's own id; candump -L logs both interfaces with the
 # kernel's receive stamps, so the latency of a frame is its stamp on vcan1 minus its stamp on vcan0, whatever the
 # observers' scheduling. Prints one JSON document: per variant the frames, p50, p99, p99.9 (us) and their ratios
@@ -24,6 +28,7 @@ per_block=$(((frames + rounds - 1) / rounds))
 python=/usr/bin/python3
 
 variants=(cangw new new-norec new-rt0)
+[[ -x $bin/lever-bench-relay-floor ]] && variants+=(floor floor-hmac)
 [[ -n $old_bin ]] && variants+=(old old-norec)
 # BENCH_VARIANTS: a subset, for a quicker look (cangw is always measured: the ratios need it).
 if [[ -n ${BENCH_VARIANTS:-} ]]; then
@@ -56,6 +61,13 @@ start_pair() {  # start_pair BIN rec|norec EXTRA_ARGS...: a bridge on each inter
   # it are dropped as stale, so none is sent until well after.
   sleep 1
 }
+start_floor() {  # start_floor EXTRA_ARGS...: the floor relay's two processes, the receiver first
+  "$bin/lever-bench-relay-floor" udp-to-can --bind 127.0.0.1:5001 --can vcan1 "$@" 2>>"$work/bridges.err" &
+  pair_b=$!
+  "$bin/lever-bench-relay-floor" can-to-udp --can vcan0 --peer 127.0.0.1:5001 "$@" 2>>"$work/bridges.err" &
+  pair_a=$!
+  sleep 1  # as long as the bridges get
+}
 stop_pair() { kill -TERM $pair_a $pair_b; wait $pair_a $pair_b 2>/dev/null; }
 
 : >"$work/blocks"
@@ -70,6 +82,8 @@ for ((round = 0; round < rounds; round++)); do
       new-rt0) start_pair "$bin" rec --realtime-priority 0 ;;
       old) start_pair "$old_bin" rec ;;
       old-norec) start_pair "$old_bin" norec ;;
+      floor) start_floor ;;
+      floor-hmac) start_floor --hmac ;;
     esac
     cangen vcan0 -I "$id" -L 8 -D i -g "$gap_ms" -n "$per_block"
     sleep 0.3

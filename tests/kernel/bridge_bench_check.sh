@@ -11,9 +11,12 @@ trap 'rm -f "$json"' EXIT
   echo "bench-bridge failed" >&2
   exit 1
 }
-jq -e '
+expected='["cangw", "new", "new-norec", "new-rt0", "old", "old-norec"]'
+[[ -x $build/bin/lever-bench-relay-floor ]] &&
+  expected='["cangw", "new", "new-norec", "new-rt0", "floor", "floor-hmac", "old", "old-norec"]'
+jq -e --argjson expected "$expected" '
   def num: type == "number" and (isnan | not) and (isinfinite | not);
-  (.variants | keys | sort) == (["cangw", "new", "new-norec", "new-rt0", "old", "old-norec"] | sort)
+  (.variants | keys | sort) == ($expected | sort)
   and ([.variants[] | (.frames + .lost) == 40 and .frames > 0
         and (.p50_us | num) and (.p99_us | num) and (.p99_9_us | num) and (.max_us | num)
         and (.ratio_to_cangw | (.p50 | num) and (.p99 | num) and (.p99_9 | num))] | all)
