@@ -10,31 +10,18 @@
 
 namespace lever::hil {
 
-inline const program::Choices<ScenarioKind> kScenarios{{"wall-tap", ScenarioKind::wall_tap},
-                                                       {"free-motion", ScenarioKind::free_motion},
-                                                       {"press-hold", ScenarioKind::press_hold},
-                                                       {"sphere-3dof", ScenarioKind::sphere_3dof}};
-inline const program::Choices<Topology> kTopologies{
-    {"one-controller", Topology::one_controller}, {"one-site", Topology::one_site}, {"two-sites", Topology::two_sites}};
-inline const program::Choices<fw::MotionVelocity> kMotionVelocities{
-    {"difference", fw::MotionVelocity::difference},
-    {"adaptive-window", fw::MotionVelocity::adaptive_window},
-    {"estimate", fw::MotionVelocity::estimate}};
-inline const program::Choices<SphereVelocityChain> kDeviceVelocities{{"driver", SphereVelocityChain::driver},
-                                                                     {"difference", SphereVelocityChain::difference}};
-inline const program::Choices<SpherePositionSensor> kPositionSensors{
-    {"joint-encoders", SpherePositionSensor::joint_encoders},
-    {"cartesian-grid", SpherePositionSensor::cartesian_grid},
-    {"exact", SpherePositionSensor::exact}};
-inline const program::Choices<SphereTopClock> kTopClocks = program::choices_of(kAllTopClocks, name);
-inline const program::Choices<GaugeChain> kGaugeChains{
-    {"topology", GaugeChain::topology}, {"dad141", GaugeChain::dad141}, {"paper-adc", GaugeChain::paper_adc}};
+// Each from its enum's own table and names, next to the type.
+inline const program::Choices<ScenarioKind> kScenarios = program::choices_of(kAllScenarios);
+inline const program::Choices<Topology> kTopologies = program::choices_of(kAllTopologies);
+inline const program::Choices<fw::MotionVelocity> kMotionVelocities = program::choices_of(fw::kAllMotionVelocities);
+inline const program::Choices<SphereVelocityChain> kDeviceVelocities = program::choices_of(kAllVelocityChains);
+inline const program::Choices<SpherePositionSensor> kPositionSensors = program::choices_of(kAllPositionSensors);
+inline const program::Choices<SphereTopClock> kTopClocks = program::choices_of(kAllTopClocks);
+inline const program::Choices<GaugeChain> kGaugeChains = program::choices_of(kAllGaugeChains);
 inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
-inline const program::Choices<EncoderInterface> kEncoderInterfaces{{"gpio-events", EncoderInterface::gpio_events},
-                                                                   {"counter", EncoderInterface::counter}};
+inline const program::Choices<EncoderInterface> kEncoderInterfaces = program::choices_of(kAllEncoderInterfaces);
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
-inline const program::Choices<fw::PassivityMode> kPassivity{
-    {"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}};
+inline const program::Choices<fw::PassivityMode> kPassivity = program::choices_of(fw::kAllPassivityModes);
 inline const program::Choices<codec::Mode> kModes = program::choices_of(codec::kAllModes, codec::name);
 
 }  // namespace lever::hil

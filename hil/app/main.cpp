@@ -57,7 +57,7 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
               ->default_str("0.1");
   cmd.app->add_option("--scenario", o.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
-      ->default_str("wall-tap");
+      ->default_str(std::string(name(ScenarioKind::wall_tap)));
   cmd.app->add_option("--out", o.out_dir, "output directory")->required()->check(program::path());
   cmd.app->add_option("--seeds", o.seeds, "seeds per point")->check(program::whole(1, 100))->default_str("3");
   cmd.app->add_option("--duration", o.duration_s, "simulated seconds per run")
@@ -87,7 +87,7 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
                      ->add_option("--topology", o.topology,
                                   "lever sweeps over p: one-controller (the paper's PC), one-site or two-sites")
                      ->transform(program::one_of(kTopologies))
-                     ->default_str("one-controller");
+                     ->default_str(std::string(name(Topology::one_controller)));
   cmd.force_loop = cmd.app
                        ->add_option("--hsi-force-loop", o.hsi_force_loop,
                                     "lever sweeps over p (on the dad141 gauge chain, whose contact holds): the HSI's "
@@ -111,7 +111,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
       ->check(CLI::ExistingFile);
   serve->add_option("--scenario", o.scenario, "wall-tap (the paper's task), free-motion or press-hold")
       ->transform(program::one_of(kScenarios))
-      ->default_str("wall-tap");
+      ->default_str(std::string(name(ScenarioKind::wall_tap)));
   serve
       ->add_option("--duration", o.duration_s,
                    "seconds of scenario once both levers are armed (0: until SIGINT or SIGTERM)")

@@ -28,44 +28,6 @@ nlohmann::json reaction_json(const FaultReport::LeverReaction& r, double injecte
 
 }  // namespace
 
-std::string scenario_name(ScenarioKind kind) {
-  switch (kind) {
-    case ScenarioKind::wall_tap:
-      return "wall-tap";
-    case ScenarioKind::free_motion:
-      return "free-motion";
-    case ScenarioKind::press_hold:
-      return "press-hold";
-    case ScenarioKind::sphere_3dof:
-      return "sphere-3dof";
-  }
-  return "?";
-}
-
-const char* motion_velocity_name(fw::MotionVelocity v) {
-  switch (v) {
-    case fw::MotionVelocity::difference:
-      return "difference";
-    case fw::MotionVelocity::adaptive_window:
-      return "adaptive-window";
-    case fw::MotionVelocity::estimate:
-      return "estimate";
-  }
-  return "?";
-}
-
-std::string topology_name(Topology t) {
-  switch (t) {
-    case Topology::one_controller:
-      return "one-controller";
-    case Topology::one_site:
-      return "one-site";
-    case Topology::two_sites:
-      return "two-sites";
-  }
-  return "?";
-}
-
 std::string trace_csv_header() {
   return "t,hsi_angle,top_angle,hsi_velocity,top_position_ref,contact_force,measured_force,displayed_force,"
          "hsi_torque,top_torque,hand_force,motion_sent,force_sent,hsi_state,top_state\n";
@@ -86,7 +48,7 @@ nlohmann::json lever_faults_json(const SimResult::LeverFaults& f) {
 nlohmann::json parameters_json(const SimConfig& config) {
   return {{"velocity", codec_json(config.velocity_codec)},
           {"force", codec_json(config.force_codec)},
-          {"topology", topology_name(config.topology)},
+          {"topology", name(config.topology)},
           {"delay_ms", config.network.delay_ms},
           {"jitter_ms", config.network.jitter_ms},
           {"loss", config.network.loss},
@@ -100,15 +62,15 @@ nlohmann::json parameters_json(const SimConfig& config) {
           {"homing", config.homing},
           {"hsi_force_loop", config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor},
           {"encoder_counts_per_turn", config.hsi_firmware.counts_per_rev},
-          {"encoder_interface", config.encoder_interface == EncoderInterface::counter ? "counter" : "gpio-events"},
-          {"motion_velocity", motion_velocity_name(config.hsi_firmware.motion_velocity)},
+          {"encoder_interface", name(config.encoder_interface)},
+          {"motion_velocity", fw::name(config.hsi_firmware.motion_velocity)},
           {"operator_speed", config.operator_params.speed_factor},
           {"operator_dwell", config.operator_params.dwell_factor},
           {"jnd", config.jnd},
           {"jnd_absolute_n", config.jnd_absolute_n},
           {"substeps", config.substeps},
           {"wall_stiffness", config.wall.stiffness},
-          {"gauge_chain", reads_paper_gauge(config) ? "paper-adc" : "dad141"},
+          {"gauge_chain", name(reads_paper_gauge(config) ? GaugeChain::paper_adc : GaugeChain::dad141)},
           {"gauge_noise_n", effective_gauge(config).noise_n},
           {"gauge_filter_hz", effective_gauge(config).filter_hz},
           {"gauge_rate_hz", effective_gauge(config).output_rate_hz()},
@@ -133,7 +95,7 @@ nlohmann::json faults_json(const SimResult& r) {
 
 nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
   return {
-      {"scenario", scenario_name(config.scenario)},
+      {"scenario", name(config.scenario)},
       {"duration_s", config.duration_s},
       {"seed", config.seed},
       {"velocity_packet_rate", r.velocity_packet_rate},
@@ -192,9 +154,9 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& r) {
 }
 
 void print_report(std::FILE* out, const SimConfig& c, const SimResult& r) {
-  fmt::print(out, "{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n",
-             scenario_name(c.scenario), c.duration_s, c.seed, codec::name(c.velocity_codec.mode), c.velocity_codec.p,
-             c.velocity_codec.floor, codec::name(c.force_codec.mode), c.force_codec.p, c.force_codec.floor);
+  fmt::print(out, "{} for {} s (seed {}), velocity {} p={} floor={}, force {} p={} floor={}\n", name(c.scenario),
+             c.duration_s, c.seed, codec::name(c.velocity_codec.mode), c.velocity_codec.p, c.velocity_codec.floor,
+             codec::name(c.force_codec.mode), c.force_codec.p, c.force_codec.floor);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz\n", 100 * r.velocity_packet_rate,
              100 * r.force_packet_rate);
   fmt::print(out,

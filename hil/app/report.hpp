@@ -12,9 +12,6 @@ nlohmann::json report_json(const SimConfig& config, const SimResult& result);
 nlohmann::json codec_json(const codec::Config<double>& c);
 // The same for a person: a few lines.
 void print_report(std::FILE* out, const SimConfig& config, const SimResult& result);
-std::string scenario_name(ScenarioKind kind);
-std::string topology_name(Topology topology);
-const char* motion_velocity_name(fw::MotionVelocity velocity);
 
 // The per-tick trace CSV that run and serve write: the header line and one row, each ending in a newline.
 std::string trace_csv_header();

@@ -51,7 +51,7 @@ void add_scenario_options(CLI::App& cmd, RunOptions& o) {
   cmd.add_option("--scenario", o.config.scenario,
                  "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
       ->transform(program::one_of(kScenarios))
-      ->default_str("wall-tap");
+      ->default_str(std::string(name(ScenarioKind::wall_tap)));
   cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
       ->check(program::number(kRunSeconds))
       ->default_str("20");
@@ -173,7 +173,7 @@ void add_device_options(CLI::App& cmd, RunOptions& o) {
          "kinematics, in doubles), cartesian-grid (55 um cells, the model before issue 33) or exact (the simulated "
          "tip's unquantized position: a diagnostic, no device's chain)")
       ->transform(program::one_of(kPositionSensors))
-      ->default_str("joint-encoders");
+      ->default_str(std::string(name(SphereConfig{}.position_sensor)));
   cmd.add_option("--device-encoder-counts", o.device_encoder_counts,
                  "sphere-3dof: each of the Omni's three joint encoders' counts per turn, with --position-sensor "
                  "joint-encoders (a diagnostic: the device has 15000)")
@@ -215,7 +215,7 @@ void add_encoder_options(CLI::App& cmd, RunOptions& o) {
                  "how the controllers read their encoders: gpio-events (libgpiod's edge queues, the project's board) "
                  "or counter (a hardware counter, no queue)")
       ->transform(program::one_of(kEncoderInterfaces))
-      ->default_str("gpio-events");
+      ->default_str(std::string(name(EncoderInterface::gpio_events)));
 }
 
 // Homing and injected faults.

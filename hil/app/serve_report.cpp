@@ -34,8 +34,8 @@ nlohmann::json serve_json(const ServeSummary& s, const ServeMetrics& metrics) {
 
 void print_human(std::FILE* out, const ServeOptions& o, const ServeSummary& s, const ServeMetrics& metrics) {
   const SimResult& r = s.result;
-  fmt::print(out, "served {:.1f} s of {} after {:.1f} s of homing and arming\n", s.sim.duration_s,
-             scenario_name(o.scenario), r.homed_at_s);
+  fmt::print(out, "served {:.1f} s of {} after {:.1f} s of homing and arming\n", s.sim.duration_s, name(o.scenario),
+             r.homed_at_s);
   fmt::print(out, "  packets: velocity {:.1f} %, force {:.1f} % of 1 kHz (while both armed: {:.1f} s)\n",
              100 * r.velocity_packet_rate, 100 * r.force_packet_rate, 1e-3 * static_cast<double>(r.armed_ticks));
   fmt::print(out,

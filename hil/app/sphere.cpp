@@ -91,11 +91,9 @@ nlohmann::json sphere_report_json(const SphereConfig& c, const SphereResult& r) 
         {"delay_ms", c.network.delay_ms},
         {"jitter_ms", c.network.jitter_ms},
         {"loss", c.network.loss},
-        {"device_velocity", c.velocity_chain == SphereVelocityChain::driver ? "driver" : "difference"},
+        {"device_velocity", name(c.velocity_chain)},
         {"driver_cutoff_hz", c.driver_cutoff_hz},
-        {"position_sensor", c.position_sensor == SpherePositionSensor::joint_encoders   ? "joint-encoders"
-                            : c.position_sensor == SpherePositionSensor::cartesian_grid ? "cartesian-grid"
-                                                                                        : "exact"},
+        {"position_sensor", name(c.position_sensor)},
         {"top_clock", name(c.top_clock)},
         {"top_clock_drift_ppm_max", c.top_clock_drift_ppm_max},
         {"jnd", c.jnd},

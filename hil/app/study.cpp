@@ -101,7 +101,9 @@ SimConfig hil_config(const StudyOptions& o) {
   return c;
 }
 
-std::string gauge_chain_name(const SimConfig& c) { return reads_paper_gauge(c) ? "paper-adc" : "dad141"; }
+std::string gauge_chain_name(const SimConfig& c) {
+  return std::string(name(reads_paper_gauge(c) ? GaugeChain::paper_adc : GaugeChain::dad141));
+}
 
 // What the header says of the simulated pair: enough to run the same session again, and the clock its bus times
 // are on.
@@ -116,8 +118,8 @@ nlohmann::json simulator_json(const StudyOptions& o, const SimConfig& c) {
                                                                   {"p1_force", study::RatingObserver{}.p1_force},
                                                                   {"sigma", study::RatingObserver{}.sigma}};
   return {{"program", "lever-hil study"},
-          {"scenario", "wall-tap"},
-          {"topology", topology_name(c.topology)},
+          {"scenario", name(ScenarioKind::wall_tap)},
+          {"topology", name(c.topology)},
           {"gauge_chain", gauge_chain_name(c)},
           {"hsi_force_loop", o.hsi_force_loop},
           {"seed", c.seed},
@@ -327,7 +329,7 @@ void add_study_options(CLI::App& cmd, StudyOptions& o) {
                                  ->default_str("0.02"));
   cmd.add_option("--topology", o.topology, "one-controller (the paper's PC), one-site or two-sites")
       ->transform(program::one_of(kTopologies))
-      ->default_str("one-controller");
+      ->default_str(std::string(name(Topology::one_controller)));
   cmd.add_option("--gauge-chain", o.gauge_chain,
                  "the strain-gauge chain: dad141 (Fig. 8's setup), paper-adc (an assumed chain for the paper's PC) or "
                  "topology (the topology's own)")
@@ -400,7 +402,7 @@ int run_study(const StudyOptions& o) {
   fmt::print(
       "lever-hil study: SIMULATED session of {} ({}) on the HIL's pair ({}, {} gauge, seed {}) written to {}: {} "
       "records ({} void), {:.0f} s simulated in {:.1f} s\n",
-      program::printable(o.subject), o.protocol, topology_name(config.topology), gauge_chain_name(config), o.seed,
+      program::printable(o.subject), o.protocol, name(config.topology), gauge_chain_name(config), o.seed,
       program::printable(o.log), attempt, voids, simulated_s, progress.wall_s());
   return 0;
 }

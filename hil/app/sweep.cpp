@@ -167,10 +167,10 @@ int run_sweep(const SweepOptions& o) {
     if (job.seed == static_cast<std::uint64_t>(o.seeds))
       table.end_point(fmt::format("{},{}", job.variant->name, 100 * job.p));
   }
-  const std::string setup = fmt::format("{}, {} gauge chain, HSI force loop {}", topology_name(o.topology),
+  const std::string setup = fmt::format("{}, {} gauge chain, HSI force loop {}", name(o.topology),
                                         o.gauge_chain == GaugeChain::paper_adc ? "the paper's" : "DAD 141.1",
                                         o.hsi_force_loop ? "on" : "off");
-  write_sweep(dir, table, gnuplot_script(plots(scenario_name(o.scenario), setup, o.seeds)));
+  write_sweep(dir, table, gnuplot_script(plots(std::string(name(o.scenario)), setup, o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

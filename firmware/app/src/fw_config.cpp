@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "lever/program/choices.hpp"
 #include "lever/program/text.hpp"
 
 namespace lever::app {
@@ -142,7 +143,8 @@ ConfigSchema schema_for(FwConfig& config) {
 
   bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
   s.choice("codec.motion.velocity", l.motion_velocity,
-           {{"difference", fw::MotionVelocity::difference}, {"estimate", fw::MotionVelocity::estimate}},
+           {{fw::name(fw::MotionVelocity::difference), fw::MotionVelocity::difference},
+            {fw::name(fw::MotionVelocity::estimate), fw::MotionVelocity::estimate}},
            "HSI sends the quantized position's backward difference (the paper's; 0 at rest) or the velocity estimate");
   bind_codec(s, "codec.force", l.force_codec, "N");
 
@@ -207,10 +209,8 @@ ConfigSchema schema_for(FwConfig& config) {
            "HSI damping while a contact force is displayed");
   s.number("control.display.contact_threshold_n", l.display.contact_threshold_n, 0.0, 100.0, "N",
            "displayed force above which the lever is in contact");
-  s.choice(
-      "control.passivity.mode", l.passivity.mode,
-      {{"off", fw::PassivityMode::off}, {"observe", fw::PassivityMode::observe}, {"tdpa", fw::PassivityMode::tdpa}},
-      "time-domain passivity: off, observe (observer and energy frames only) or tdpa (the controller acts)");
+  s.choice("control.passivity.mode", l.passivity.mode, program::choices_of(fw::kAllPassivityModes),
+           "time-domain passivity: off, observe (observer and energy frames only) or tdpa (the controller acts)");
   s.number("control.passivity.drift_gain_per_s", l.passivity.drift_gain_per_s, 0.0, 999.0, "1/s",
            "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
   s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",

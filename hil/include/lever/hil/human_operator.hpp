@@ -4,6 +4,7 @@
 // force segments (press, hold) by a slow force loop on the force the hand feels, with a reaction delay.
 #include <array>
 #include <cstdint>
+#include <string_view>
 
 #include "lever/common/rng.hpp"
 #include "lever/fw/tick.hpp"
@@ -25,6 +26,14 @@ struct OperatorParams {
 
 // sphere_3dof is the paper's 3-DoF experiment: no lever, no HumanOperator (lever/hil/sphere3dof.hpp).
 enum class ScenarioKind : std::uint8_t { wall_tap, free_motion, press_hold, sphere_3dof };
+inline constexpr ScenarioKind kAllScenarios[] = {ScenarioKind::wall_tap, ScenarioKind::free_motion,
+                                                 ScenarioKind::press_hold, ScenarioKind::sphere_3dof};
+constexpr std::string_view name(ScenarioKind k) {
+  return k == ScenarioKind::wall_tap      ? "wall-tap"
+         : k == ScenarioKind::free_motion ? "free-motion"
+         : k == ScenarioKind::press_hold  ? "press-hold"
+                                          : "sphere-3dof";
+}
 
 // One piece of intent.
 struct Segment {

@@ -5,6 +5,7 @@
 // stop and are armed by the host; the scenario's clock starts when both are armed. Deterministic: the same
 // configuration and seed give the same results, bit for bit.
 #include <cstdint>
+#include <string_view>
 #include <functional>
 #include <optional>
 #include <string>
@@ -42,16 +43,28 @@ struct TraceRow;
 // drained every tick, 12 rad/s at 16384 counts per turn), or with a hardware counter (an MCU timer in encoder mode,
 // /dev/counterN), which has no queue; the HIL gives the latter an edge queue of QuadratureEncoder::kMaxQueue.
 enum class EncoderInterface { gpio_events, counter };
+inline constexpr EncoderInterface kAllEncoderInterfaces[] = {EncoderInterface::gpio_events, EncoderInterface::counter};
+constexpr std::string_view name(EncoderInterface e) {
+  return e == EncoderInterface::counter ? "counter" : "gpio-events";
+}
 
 // Where the levers are: both in one controller (the paper's single PC: no bus, each tick's samples reach the other
 // lever in that tick), both on one CAN bus, or each on its own site's bus, the buses joined by two lever-bridges
 // over an IP link (the network parameters apply only there).
 enum class Topology { one_controller, one_site, two_sites };
+inline constexpr Topology kAllTopologies[] = {Topology::one_controller, Topology::one_site, Topology::two_sites};
+constexpr std::string_view name(Topology t) {
+  return t == Topology::one_controller ? "one-controller" : t == Topology::one_site ? "one-site" : "two-sites";
+}
 
 // Which chain reads the levers' strain gauges (docs/hil-model.md): the deployment's Modbus weighing amplifier (the
 // DAD 141.1, `gauge` below), the paper's instrumentation amplifier and 1 kHz ADC (paper_adc_gauge()), or the one
 // that goes with the topology: the paper's in one controller (the paper's setup), the DAD on one or two sites.
 enum class GaugeChain : std::uint8_t { topology, dad141, paper_adc };
+inline constexpr GaugeChain kAllGaugeChains[] = {GaugeChain::topology, GaugeChain::dad141, GaugeChain::paper_adc};
+constexpr std::string_view name(GaugeChain g) {
+  return g == GaugeChain::topology ? "topology" : g == GaugeChain::dad141 ? "dad141" : "paper-adc";
+}
 
 struct SimConfig;
 // The strain-gauge chain the run's levers read: the paper's ADC or the DAD 141.1 (config.gauge), by gauge_chain.

@@ -56,12 +56,24 @@ struct SphereParams {
 // How the OP reads the device's velocity (docs/hil-model.md): as the PHANToM Omni ROS driver gives it (a second-order
 // backward difference and a third-order Butterworth low-pass), or the one-tick difference of the quantized position.
 enum class SphereVelocityChain : std::uint8_t { driver, difference };
+inline constexpr SphereVelocityChain kAllVelocityChains[] = {SphereVelocityChain::driver,
+                                                             SphereVelocityChain::difference};
+constexpr std::string_view name(SphereVelocityChain c) {
+  return c == SphereVelocityChain::driver ? "driver" : "difference";
+}
 
 // How the OP reads the tip's position (docs/hil-model.md, "The position as the Omni measures it"): as the Omni does,
 // three joint encoders and the kinematics, in doubles; or, for comparison, quantized on a Cartesian grid of the data
 // sheet's resolution (the model before issue 33); or, as a diagnostic that is no device's chain, the tip's exact
 // position, unquantized.
 enum class SpherePositionSensor : std::uint8_t { joint_encoders, cartesian_grid, exact };
+inline constexpr SpherePositionSensor kAllPositionSensors[] = {
+    SpherePositionSensor::joint_encoders, SpherePositionSensor::cartesian_grid, SpherePositionSensor::exact};
+constexpr std::string_view name(SpherePositionSensor s) {
+  return s == SpherePositionSensor::joint_encoders   ? "joint-encoders"
+         : s == SpherePositionSensor::cartesian_grid ? "cartesian-grid"
+                                                     : "exact";
+}
 
 // How the two PCs keep time (docs/hil-model.md, "The teleoperator's own clock"): the TOP on its own 1 kHz clock, at
 // a phase and a drift drawn per seed, each side applying a packet when it arrives and evaluating the sender's model

@@ -24,6 +24,12 @@ Choices<E> choices_of(const E (&all)[N], NameOf name_of) {
   return choices;
 }
 
+// The same with the enum's name() found next to its type (by argument-dependent lookup): one table, one spelling.
+template <typename E, std::size_t N>
+Choices<E> choices_of(const E (&all)[N]) {
+  return choices_of(all, [](E e) { return name(e); });
+}
+
 template <typename E>
 std::string choice_names(const Choices<E>& choices) {
   std::string names;

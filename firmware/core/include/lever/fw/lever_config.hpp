@@ -26,6 +26,14 @@ namespace lever::fw {
 // The adaptive window is a difference too, over the longest window (up to 20 ms) the counts allow: finer steps
 // while the lever moves slowly, still exactly zero at rest (adaptive_window_velocity.hpp).
 enum class MotionVelocity : std::uint8_t { difference, estimate, adaptive_window };
+// In the order the options list them; a board's lever-fw takes difference and estimate (docs/lever-fw.md).
+inline constexpr MotionVelocity kAllMotionVelocities[] = {MotionVelocity::difference, MotionVelocity::adaptive_window,
+                                                          MotionVelocity::estimate};
+constexpr const char* name(MotionVelocity v) noexcept {
+  return v == MotionVelocity::difference ? "difference"
+         : v == MotionVelocity::estimate ? "estimate"
+                                         : "adaptive-window";
+}
 
 struct LeverConfig {
   protocol::Role role = protocol::Role::hsi;

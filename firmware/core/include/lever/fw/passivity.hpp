@@ -18,6 +18,7 @@ namespace lever::fw {
 // energy frames but never acts (to measure what the channel does); tdpa also acts.
 enum class PassivityMode : std::uint8_t { off, observe, tdpa };
 
+inline constexpr PassivityMode kAllPassivityModes[] = {PassivityMode::off, PassivityMode::observe, PassivityMode::tdpa};
 constexpr const char* name(PassivityMode m) noexcept {
   return m == PassivityMode::tdpa ? "tdpa" : m == PassivityMode::observe ? "observe" : "off";
 }
