@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "allow_list.hpp"
@@ -60,6 +62,113 @@ int keygen(const std::string& out) {
   }
 }
 
+// What the command line says; each option left out leaves the configuration file's value (or the default).
+struct CommandLine {
+  std::string config_file;
+  std::optional<std::string> can, bind, peer, key_file, allow, record;
+  std::optional<int> site_id, peer_site_id, realtime_priority;
+  bool stats_json = false, insecure = false, check_only = false;
+  CLI::App* keygen = nullptr;
+  std::string keygen_out;
+};
+
+void add_options(CLI::App& app, CommandLine& o) {
+  lever::program::describe(app, "lever-bridge");  // --version; the footer below says more
+  app.footer(
+      "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
+      "socket, the recording); 2 bad input (an option, the configuration file, the key file,\n"
+      "keygen --out naming an existing file or a missing directory).");
+  app.add_option("--config", o.config_file,
+                 "TOML file with any of the options below as keys (the command line wins); relative paths in it "
+                 "are relative to the file");
+  app.add_option("--can", o.can, "SocketCAN interface, e.g. can0 or vcan0");
+  app.add_option("--bind", o.bind, "local UDP address, HOST:PORT or [IPv6]:PORT");
+  app.add_option("--peer", o.peer, "the other bridge's UDP address (one unicast address)");
+  app.add_option("--key", o.key_file, "pre-shared key file (64 hex digits, mode 0600; see keygen)");
+  app.add_option("--allow", o.allow,
+                 "CAN ids allowed in both directions, hex ids and ranges: 0x100-0x1FF,0x700 "
+                 "(default: the lever protocol's ids)");
+  app.add_option("--record", o.record, "record every frame both ways to this candump -L log file");
+  app.add_flag("--stats-json", o.stats_json, "print a JSON line of statistics every second");
+  app.add_option("--site-id", o.site_id, "this end's id in datagrams, 0-255 (default random)")
+      ->check(lever::program::whole(0, 255));
+  app.add_option("--peer-site-id", o.peer_site_id,
+                 "the peer's site id, 0-255: datagrams carrying another are refused (default: any but our own)")
+      ->check(lever::program::whole(0, 255));
+  app.add_flag("--insecure", o.insecure, "no authentication (a public key): for debugging only");
+  app.add_option("--realtime-priority", o.realtime_priority,
+                 "SCHED_FIFO priority of the two relay threads, with memory locked (default 40; 0: normal "
+                 "scheduling); where the system refuses it, one warning and normal scheduling")
+      ->check(lever::program::whole(0, 99));
+  app.add_flag("--check-config", o.check_only,
+               "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
+               "not); opens no CAN interface and no socket");
+  o.keygen = app.add_subcommand(
+      "keygen", "make a new random key: with --out, a new file of mode 0600 (never overwriting one); else stdout");
+  o.keygen->add_option("--out", o.keygen_out, "the key file to create ('-': stdout)");
+  app.require_subcommand(0, 1);
+}
+
+// The command line over the configuration file, validated. Throws std::invalid_argument (and the key file's
+// errors) with the message to show; every such problem is bad input.
+BridgeConfig resolve(const CommandLine& o) {
+  BridgeConfig config;
+  if (!o.config_file.empty()) load_config_file(o.config_file, config);
+  auto bad = [](std::string message) { return std::invalid_argument(std::move(message)); };
+  if (o.can) config.can_interface = *o.can;
+  if (o.bind) config.bind = *o.bind;
+  if (o.peer) config.peer = *o.peer;
+  if (o.key_file) {
+    if (o.key_file->empty()) throw bad("--key: the path is empty");
+    config.key_file = *o.key_file;
+  }
+  if (o.allow) {
+    try {
+      config.allow_to_network = config.allow_from_network = AllowList::parse(*o.allow);
+    } catch (const std::invalid_argument& e) {
+      throw bad(fmt::format("--allow: {}", e.what()));
+    }
+  }
+  if (o.record) {
+    if (o.record->empty()) throw bad("--record: the path is empty");
+    config.record = *o.record;
+  }
+  if (o.site_id) config.site_id = static_cast<std::uint8_t>(*o.site_id);
+  if (o.peer_site_id) config.peer_site_id = static_cast<std::uint8_t>(*o.peer_site_id);
+  if (o.realtime_priority) config.realtime_priority = *o.realtime_priority;
+  config.stats_json = config.stats_json || o.stats_json;
+  config.insecure = o.insecure;  // only ever from the command line, where it is explicit
+  validate(config);
+  if (config.record && !o.config_file.empty()) {
+    std::error_code ec;
+    if (std::filesystem::equivalent(*config.record, o.config_file, ec))
+      throw bad(fmt::format("record '{}' is the configuration file", shown_value(config.record->string())));
+  }
+  if (config.insecure && !config.key_file.empty()) throw bad("--insecure and --key exclude each other");
+  if (!config.insecure && config.key_file.empty()) throw bad("--key is required (or --insecure, for debugging)");
+  return config;
+}
+
+// The key the configuration names, or with --insecure the public one, said loudly.
+Key key_for(const BridgeConfig& config) {
+  if (!config.insecure) return load_key_file(config.key_file);
+  fmt::print(stderr,
+             "lever-bridge: WARNING: --insecure: datagrams are not authenticated; anyone who can reach {} can put "
+             "frames on {}\n",
+             config.bind, config.can_interface);
+  return insecure_key();
+}
+
+// SIGINT, SIGTERM and SIGHUP are taken by the relay's signalfd: blocked before any thread (the recorder's) starts.
+void block_stop_signals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -69,101 +178,21 @@ int main(int argc, char** argv) {
       "addresses, forged, tampered, replayed or sent before this bridge started are dropped and counted; an\n"
       "allow-list per direction keeps other ids off both sides. SIGINT, SIGTERM and SIGHUP flush the recording\n"
       "and exit 0."};
-  lever::program::describe(app, "lever-bridge");  // --version; the footer below says more
-  app.footer(
-      "Exit status: 0 success (also after SIGINT, SIGTERM or SIGHUP); 1 runtime failure (the CAN interface, the\n"
-      "socket, the recording); 2 bad input (an option, the configuration file, the key file,\n"
-      "keygen --out naming an existing file or a missing directory).");
-  std::string config_file;
-  std::optional<std::string> can, bind, peer, key_file, allow, record;
-  std::optional<int> site_id, peer_site_id, realtime_priority;
-  bool stats_json = false, insecure = false, check_only = false;
-  app.add_option("--config", config_file,
-                 "TOML file with any of the options below as keys (the command line wins); relative paths in it "
-                 "are relative to the file");
-  app.add_option("--can", can, "SocketCAN interface, e.g. can0 or vcan0");
-  app.add_option("--bind", bind, "local UDP address, HOST:PORT or [IPv6]:PORT");
-  app.add_option("--peer", peer, "the other bridge's UDP address (one unicast address)");
-  app.add_option("--key", key_file, "pre-shared key file (64 hex digits, mode 0600; see keygen)");
-  app.add_option("--allow", allow,
-                 "CAN ids allowed in both directions, hex ids and ranges: 0x100-0x1FF,0x700 "
-                 "(default: the lever protocol's ids)");
-  app.add_option("--record", record, "record every frame both ways to this candump -L log file");
-  app.add_flag("--stats-json", stats_json, "print a JSON line of statistics every second");
-  app.add_option("--site-id", site_id, "this end's id in datagrams, 0-255 (default random)")
-      ->check(lever::program::whole(0, 255));
-  app.add_option("--peer-site-id", peer_site_id,
-                 "the peer's site id, 0-255: datagrams carrying another are refused (default: any but our own)")
-      ->check(lever::program::whole(0, 255));
-  app.add_flag("--insecure", insecure, "no authentication (a public key): for debugging only");
-  app.add_option("--realtime-priority", realtime_priority,
-                 "SCHED_FIFO priority of the two relay threads, with memory locked (default 40; 0: normal "
-                 "scheduling); where the system refuses it, one warning and normal scheduling")
-      ->check(lever::program::whole(0, 99));
-  app.add_flag("--check-config", check_only,
-               "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
-               "not); opens no CAN interface and no socket");
-  auto* keygen_command = app.add_subcommand(
-      "keygen", "make a new random key: with --out, a new file of mode 0600 (never overwriting one); else stdout");
-  std::string keygen_out;
-  keygen_command->add_option("--out", keygen_out, "the key file to create ('-': stdout)");
-  app.require_subcommand(0, 1);
-
+  CommandLine options;
+  add_options(app, options);
   if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
   if (sodium_init() < 0) return fail(kRuntimeFailure, "libsodium failed to initialize");
-  if (keygen_command->parsed()) return keygen(keygen_out);
+  if (options.keygen->parsed()) return keygen(options.keygen_out);
 
   BridgeConfig config;
   Key key;
   try {
-    if (!config_file.empty()) load_config_file(config_file, config);
-    // The command line overrides the file.
-    if (can) config.can_interface = *can;
-    if (bind) config.bind = *bind;
-    if (peer) config.peer = *peer;
-    if (key_file) {
-      if (key_file->empty()) return fail(kBadInput, "--key: the path is empty");
-      config.key_file = *key_file;
-    }
-    if (allow) {
-      try {
-        config.allow_to_network = config.allow_from_network = AllowList::parse(*allow);
-      } catch (const std::invalid_argument& e) {
-        return fail(kBadInput, fmt::format("--allow: {}", e.what()));
-      }
-    }
-    if (record) {
-      if (record->empty()) return fail(kBadInput, "--record: the path is empty");
-      config.record = *record;
-    }
-    if (site_id) config.site_id = static_cast<std::uint8_t>(*site_id);
-    if (peer_site_id) config.peer_site_id = static_cast<std::uint8_t>(*peer_site_id);
-    if (realtime_priority) config.realtime_priority = *realtime_priority;
-    config.stats_json = config.stats_json || stats_json;
-    config.insecure = insecure;  // only ever from the command line, where it is explicit
-    validate(config);
-    if (config.record && !config_file.empty()) {
-      std::error_code ec;
-      if (std::filesystem::equivalent(*config.record, config_file, ec)) {
-        return fail(kBadInput,
-                    fmt::format("record '{}' is the configuration file", shown_value(config.record->string())));
-      }
-    }
-    if (config.insecure) {
-      if (!config.key_file.empty()) return fail(kBadInput, "--insecure and --key exclude each other");
-      fmt::print(stderr,
-                 "lever-bridge: WARNING: --insecure: datagrams are not authenticated; anyone who can reach {} can "
-                 "put frames on {}\n",
-                 config.bind, config.can_interface);
-      key = insecure_key();
-    } else {
-      if (config.key_file.empty()) return fail(kBadInput, "--key is required (or --insecure, for debugging)");
-      key = load_key_file(config.key_file);
-    }
+    config = resolve(options);
+    key = key_for(config);
   } catch (const std::exception& e) {
     return fail(kBadInput, e.what());
   }
-  if (check_only) {
+  if (options.check_only) {
     fmt::print("lever-bridge: configuration valid: {} <-> {} -> {}, key {}, allow to network {}, from network {}\n",
                config.can_interface, config.bind, config.peer,
                config.insecure ? "(insecure)" : config.key_file.string(), config.allow_to_network.describe(),
@@ -171,15 +200,7 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  // SIGINT, SIGTERM and SIGHUP are taken by the relay's signalfd: block them before any thread (the recorder's)
-  // starts.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGHUP);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-
+  block_stop_signals();
   Relay relay;
   std::string error;
   if (!relay.start(config, key, error)) return fail(kRuntimeFailure, error);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -41,14 +42,17 @@ const char* kFramesHeader =
 
 // The timeline and the rate bins, filled as the frames go by: each row holds the state after every frame
 // before its time.
-struct Builder {
+// A candump log read into a session, frame by frame: the timeline and rate bins (as the frames' values are held
+// between them), frames.csv, the counts, and what places each lever's status lines on the log's time axis.
+struct LogReader {
   Session& s;
+  std::uint8_t pair;
   TimelineRow current;
   double next_row = 0.0;
   codec::DeadbandReceiver<double, 1> force_receiver;
   bool force_heard = false;
 
-  explicit Builder(Session& session) : s(session) {
+  LogReader(Session& session, std::uint8_t pair_) : s(session), pair(pair_) {
     current.hsi_position = current.top_position = current.tracking_error = kNone;
     current.measured_force = current.displayed_force = kNone;
   }
@@ -73,6 +77,175 @@ struct Builder {
       s.rates.push_back(b);
     }
     return s.rates[index];
+  }
+
+  // Per lever (0 the HSI, 1 the TOP): its faults and settings as last shown; its frames' times in order (the n-th is
+  // where its status line with tx_frames = n was, at the latest, printed) and how many data and refresh frames it
+  // had sent by each.
+  std::array<std::uint16_t, 2> faults{};
+  std::array<bool, 2> heard{};
+  std::array<std::string, 2> settings;
+  std::array<std::vector<double>, 2> sent_at;
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, 2> data_by;
+  std::array<std::pair<std::uint32_t, std::uint32_t>, 2> data_count{};
+
+  // One frame decoded: the rest of its frames.csv row (after "t,iface,message,pair,") and who sent it (0 HSI,
+  // 1 TOP, -1 a host), or the decoding error.
+  struct Decoded {
+    proto::DecodeError error = proto::DecodeError::none;
+    std::string row;
+    int sender = -1;
+  };
+  static int sender_of(const proto::FrameAddress& a) { return a.role == proto::Role::top ? 1 : 0; }
+  static Decoded failed(proto::DecodeError e) {
+    Decoded d;
+    d.error = e;
+    return d;
+  }
+
+  Decoded motion(const proto::CanFrame& frame, proto::FrameAddress a, double t) {
+    proto::MotionMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    const double position = m.position * proto::kPositionLsbRad;
+    current.hsi_position = position;
+    auto& r = bin(t);
+    ++r.motion;
+    if (m.flags.refresh) ++r.motion_refresh, ++s.motion_refresh, ++data_count[0].second;
+    ++data_count[0].first;
+    return {proto::DecodeError::none,
+            fmt::format("hsi,{:.6g},{:.6g},,,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", position,
+                        m.velocity * proto::kVelocityLsb, m.tick, m.seq, m.flags.refresh, m.flags.restart,
+                        m.flags.mode == codec::Mode::predictive),
+            0};
+  }
+
+  Decoded force(const proto::CanFrame& frame, proto::FrameAddress a, double t, double log_t) {
+    proto::ForceMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    const double value = m.force * proto::kForceLsb;
+    if (m.flags.restart) force_receiver.reset();
+    force_receiver.set_mode(m.flags.mode);
+    force_receiver.receive(log_t, {value});
+    force_heard = true;
+    current.measured_force = value;
+    auto& r = bin(t);
+    ++r.force;
+    if (m.flags.refresh) ++r.force_refresh, ++s.force_refresh, ++data_count[1].second;
+    ++data_count[1].first;
+    return {proto::DecodeError::none,
+            fmt::format("top,,,{:.6g},,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", value, m.tick, m.seq, m.flags.refresh,
+                        m.flags.restart, m.flags.mode == codec::Mode::predictive),
+            1};
+  }
+
+  static Decoded energy(const proto::CanFrame& frame, proto::FrameAddress a) {
+    proto::EnergyMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    const int sender = sender_of(a);
+    return {proto::DecodeError::none,
+            fmt::format("{},,,,{:.6f},{},,,,,,,,,,,,,,,,,\n", sender ? "top" : "hsi", m.energy * proto::kEnergyLsbJ,
+                        m.tick),
+            sender};
+  }
+
+  Decoded heartbeat(const proto::CanFrame& frame, proto::FrameAddress a, double t) {
+    proto::HeartbeatMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    const int sender = sender_of(a);
+    (sender ? current.top_state : current.hsi_state) = static_cast<int>(m.state);
+    (sender ? current.top_faults : current.hsi_faults) = std::popcount(m.faults);
+    if (!heard[sender] || faults[sender] != m.faults) {
+      if (m.faults != 0 || heard[sender])
+        s.faults_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI",
+                                            m.faults ? proto::fault_names(m.faults, "|") : "cleared"));
+      faults[sender] = m.faults;
+      heard[sender] = true;
+    }
+    return {proto::DecodeError::none,
+            fmt::format("{},,,,,,,,,,{},{:d},{},{},{},{},,,,,,,\n", sender ? "top" : "hsi", static_cast<int>(m.state),
+                        m.position_valid, proto::fault_names(m.faults, "|"), m.seq_gaps, m.rejected_frames, m.counter),
+            sender};
+  }
+
+  Decoded settings_frame(const proto::CanFrame& frame, proto::FrameAddress a, double t) {
+    proto::SettingsMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    const int sender = sender_of(a);
+    const std::string shown = settings_text(m, sender == 1);
+    if (shown != settings[sender]) {
+      s.settings_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI", shown));
+      settings[sender] = shown;
+    }
+    return {proto::DecodeError::none,
+            fmt::format("{},,,,,,,,,{:d},,,,,,,,{:.4f},{:.3f},{:.1f},{},{},{:d}\n", sender ? "top" : "hsi",
+                        m.mode == codec::Mode::predictive, m.p * proto::kPLsb, m.floor * proto::kFloorLsb,
+                        m.filter_hz * proto::kFilterHzLsb, m.changes, m.tares, m.taring),
+            sender};
+  }
+
+  static Decoded command(const proto::CanFrame& frame, proto::FrameAddress a) {
+    proto::CommandMessage m;
+    if (const auto e = proto::decode(frame, m, a); e != proto::DecodeError::none) return failed(e);
+    return {proto::DecodeError::none, fmt::format("host,,,,,,,,,,,,,,,,{},,,,,,\n", static_cast<int>(m.opcode)), -1};
+  }
+
+  Decoded decode(const LoggedFrame& lf, const proto::FrameAddress& a, double t) {
+    switch (a.kind) {
+      case proto::MessageKind::motion:
+        return motion(lf.frame, a, t);
+      case proto::MessageKind::force:
+        return force(lf.frame, a, t, lf.t);
+      case proto::MessageKind::energy:
+        return energy(lf.frame, a);
+      case proto::MessageKind::heartbeat:
+        return heartbeat(lf.frame, a, t);
+      case proto::MessageKind::settings:
+        return settings_frame(lf.frame, a, t);
+      case proto::MessageKind::command:
+        return command(lf.frame, a);
+    }
+    return failed(proto::DecodeError::unknown_id);
+  }
+
+  void read(const LoggedFrame& lf) {
+    // A log's clock that stepped back before the first frame's time: the frame is counted, drawn at the start.
+    const double t = std::max(lf.t - s.t0, 0.0);
+    rows_until(t);
+    proto::FrameAddress a;
+    if (proto::classify(lf.frame.id, a) != proto::DecodeError::none || a.pair != pair) {
+      ++s.other_frames;
+      return;
+    }
+    const Decoded d = decode(lf, a, t);
+    if (d.error != proto::DecodeError::none) {
+      ++s.decode_errors;
+      return;
+    }
+    const std::string name(proto::message_name(a));
+    ++s.counts[name];
+    s.frames_csv += fmt::format("{:.6f},{},{},{},", t, lf.iface, name, a.pair) + d.row;
+    if (d.sender < 0) return;
+    const auto lever = static_cast<std::size_t>(d.sender);
+    ++s.sent_by[lever];
+    sent_at[lever].push_back(t);
+    data_by[lever].push_back(data_count[lever]);
+  }
+
+  // The status lines on the time axis, and the TOP's position beside the HSI's at that time.
+  void place(std::vector<StatusLine>& status) {
+    for (auto& line : status) {
+      const auto& at = sent_at[line.top ? 1 : 0];
+      if (line.tx_frames == 0 || line.tx_frames > at.size()) continue;
+      const auto sent = static_cast<std::size_t>(line.tx_frames - 1);  // below at.size(): checked above
+      line.t = at[sent];
+      std::tie(line.data_in_log, line.refresh_in_log) = data_by[line.top ? 1 : 0][sent];
+      if (!line.top) continue;
+      const auto row = static_cast<std::size_t>(std::ceil(line.t / kTimelineStep));
+      if (row >= s.timeline.size()) continue;
+      auto& r = s.timeline[row];
+      r.top_position = line.position_rad;
+      if (!std::isnan(r.hsi_position)) r.tracking_error = r.hsi_position - line.position_rad;
+    }
   }
 };
 
@@ -111,148 +284,13 @@ Session session_from_log(const CandumpLog& log, std::uint8_t pair, const std::ve
           fmt::format("a frame at {:.6f} is {:.0f} s after the first: a recording of more than a "
                       "day (or a clock that jumped); cut it to the session first",
                       lf.t, lf.t - s.t0));
-  Builder b(s);
-  std::array<std::uint16_t, 2> faults{};
-  std::array<bool, 2> heard{};
-  std::array<std::string, 2> settings;  // as last shown, per lever
-  // Each lever's frames in order: the n-th is where its status line with tx_frames = n was (at the latest) printed.
-  std::array<std::vector<double>, 2> sent_at;
-  // ... and how many data and refresh frames it had sent by then.
-  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, 2> data_by;
-  std::array<std::pair<std::uint32_t, std::uint32_t>, 2> data_count{};
-
-  for (const auto& lf : log.frames) {
-    // A log's clock that stepped back before the first frame's time: the frame is counted, drawn at the start.
-    const double t = std::max(lf.t - s.t0, 0.0);
-    b.rows_until(t);
-    proto::FrameAddress a;
-    if (proto::classify(lf.frame.id, a) != proto::DecodeError::none || a.pair != pair) {
-      ++s.other_frames;
-      continue;
-    }
-    const std::string name(proto::message_name(a));
-    std::string row = fmt::format("{:.6f},{},{},{},", t, lf.iface, name, a.pair);
-    proto::DecodeError e = proto::DecodeError::none;
-    int sender = -1;
-    switch (a.kind) {
-      case proto::MessageKind::motion: {
-        proto::MotionMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        sender = 0;
-        const double position = m.position * proto::kPositionLsbRad;
-        b.current.hsi_position = position;
-        auto& r = b.bin(t);
-        ++r.motion;
-        if (m.flags.refresh) ++r.motion_refresh, ++s.motion_refresh, ++data_count[0].second;
-        ++data_count[0].first;
-        row += fmt::format("hsi,{:.6g},{:.6g},,,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", position,
-                           m.velocity * proto::kVelocityLsb, m.tick, m.seq, m.flags.refresh, m.flags.restart,
-                           m.flags.mode == codec::Mode::predictive);
-        break;
-      }
-      case proto::MessageKind::force: {
-        proto::ForceMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        sender = 1;
-        const double force = m.force * proto::kForceLsb;
-        if (m.flags.restart) b.force_receiver.reset();
-        b.force_receiver.set_mode(m.flags.mode);
-        b.force_receiver.receive(lf.t, {force});
-        b.force_heard = true;
-        b.current.measured_force = force;
-        auto& r = b.bin(t);
-        ++r.force;
-        if (m.flags.refresh) ++r.force_refresh, ++s.force_refresh, ++data_count[1].second;
-        ++data_count[1].first;
-        row += fmt::format("top,,,{:.6g},,{},{},{:d},{:d},{:d},,,,,,,,,,,,,\n", force, m.tick, m.seq, m.flags.refresh,
-                           m.flags.restart, m.flags.mode == codec::Mode::predictive);
-        break;
-      }
-      case proto::MessageKind::energy: {
-        proto::EnergyMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        sender = a.role == proto::Role::top ? 1 : 0;
-        row += fmt::format("{},,,,{:.6f},{},,,,,,,,,,,,,,,,,\n", sender ? "top" : "hsi", m.energy * proto::kEnergyLsbJ,
-                           m.tick);
-        break;
-      }
-      case proto::MessageKind::heartbeat: {
-        proto::HeartbeatMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        sender = a.role == proto::Role::top ? 1 : 0;
-        (sender ? b.current.top_state : b.current.hsi_state) = static_cast<int>(m.state);
-        (sender ? b.current.top_faults : b.current.hsi_faults) = std::popcount(m.faults);
-        if (!heard[sender] || faults[sender] != m.faults) {
-          if (m.faults != 0 || heard[sender])
-            s.faults_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI",
-                                                m.faults ? proto::fault_names(m.faults, "|") : "cleared"));
-          faults[sender] = m.faults;
-          heard[sender] = true;
-        }
-        row +=
-            fmt::format("{},,,,,,,,,,{},{:d},{},{},{},{},,,,,,,\n", sender ? "top" : "hsi", static_cast<int>(m.state),
-                        m.position_valid, proto::fault_names(m.faults, "|"), m.seq_gaps, m.rejected_frames, m.counter);
-        break;
-      }
-      case proto::MessageKind::settings: {
-        proto::SettingsMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        sender = a.role == proto::Role::top ? 1 : 0;
-        const std::string shown = settings_text(m, sender == 1);
-        if (shown != settings[sender]) {
-          s.settings_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI", shown));
-          settings[sender] = shown;
-        }
-        row += fmt::format("{},,,,,,,,,{:d},,,,,,,,{:.4f},{:.3f},{:.1f},{},{},{:d}\n", sender ? "top" : "hsi",
-                           m.mode == codec::Mode::predictive, m.p * proto::kPLsb, m.floor * proto::kFloorLsb,
-                           m.filter_hz * proto::kFilterHzLsb, m.changes, m.tares, m.taring);
-        break;
-      }
-      case proto::MessageKind::command: {
-        proto::CommandMessage m;
-        e = proto::decode(lf.frame, m, a);
-        if (e != proto::DecodeError::none) break;
-        row += fmt::format("host,,,,,,,,,,,,,,,,{},,,,,,\n", static_cast<int>(m.opcode));
-        break;
-      }
-    }
-    if (e != proto::DecodeError::none) {
-      ++s.decode_errors;
-      continue;
-    }
-    ++s.counts[name];
-    s.frames_csv += row;
-    if (sender >= 0) {
-      ++s.sent_by[static_cast<std::size_t>(sender)];
-      sent_at[static_cast<std::size_t>(sender)].push_back(t);
-      data_by[static_cast<std::size_t>(sender)].push_back(data_count[static_cast<std::size_t>(sender)]);
-    }
-  }
+  LogReader reader(s, pair);
+  for (const auto& lf : log.frames) reader.read(lf);
   s.duration = log.frames.back().t - s.t0;
-  b.rows_until(s.duration);
-  b.bin(
-      s.duration);  // the rates to the log's end: a quiet tail, or a pair that sent no data, is 0 frames/s, not no bins
-
-  // Status lines on the time axis, and the TOP's position beside the HSI's at that time.
+  reader.rows_until(s.duration);
+  reader.bin(s.duration);  // the rates to the log's end: a quiet tail, or a pair that sent no data, is 0 frames/s
   s.status = status;
-  for (auto& line : s.status) {
-    const auto& at = sent_at[line.top ? 1 : 0];
-    if (line.tx_frames == 0 || line.tx_frames > at.size()) continue;
-    const auto sent = static_cast<std::size_t>(line.tx_frames - 1);  // below at.size(): checked above
-    line.t = at[sent];
-    std::tie(line.data_in_log, line.refresh_in_log) = data_by[line.top ? 1 : 0][sent];
-    if (!line.top) continue;
-    const auto row = static_cast<std::size_t>(std::ceil(line.t / kTimelineStep));
-    if (row >= s.timeline.size()) continue;
-    auto& r = s.timeline[row];
-    r.top_position = line.position_rad;
-    if (!std::isnan(r.hsi_position)) r.tracking_error = r.hsi_position - line.position_rad;
-  }
+  reader.place(s.status);
   return s;
 }
 
