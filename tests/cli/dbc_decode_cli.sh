@@ -52,6 +52,26 @@ expect 2 "a message longer than a CAN frame" "a CAN frame has at most 64" "$work
 printf 'BO_ 256 M: 8 Node\nBO_ 256 N: 8 Node\n' >"$work/twice.dbc"
 expect 2 "an id defined twice" "defined twice" "$work/twice.dbc"
 
+# Multiplexing: a message's multiplexor (M) decides which of its mN signals a frame has; what this decoder does
+# not read is refused, never skipped.
+printf 'BO_ 256 M: 8 Node\n SG_ S m5 : 0|8@1+ (1,0) [0|0] "" Node\n' >"$work/orphan.dbc"
+expect 2 "a multiplexed signal without a multiplexor" "signal S is multiplexed, but the message has no multiplexor" \
+  "$work/orphan.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ A M : 0|8@1+ (1,0) [0|0] "" Node\n SG_ B M : 8|8@1+ (1,0) [0|0] "" Node\n' >"$work/two.dbc"
+expect 2 "two multiplexors in one message" "has a second multiplexor (B)" "$work/two.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ A M : 0|8@1+ (1,0) [0|0] "" Node\n SG_ B m1M : 8|8@1+ (1,0) [0|0] "" Node\n' >"$work/ext.dbc"
+expect 2 "extended multiplexing" "extended multiplexing, which this decoder does not read" "$work/ext.dbc"
+printf 'BO_ 256 M: 8 Node\n SG_ A : 0|8@1+ (1,0) [0|0] "" Node\nSG_MUL_VAL_ 256 A A 1-1;\n' >"$work/mulval.dbc"
+expect 2 "an SG_MUL_VAL_ line" "a signal line this decoder does not read" "$work/mulval.dbc"
+printf '(1.000000) vcan0 080#0103000000000000\n(1.001000) vcan0 080#0507E80320030A00\n' >"$work/command.log"
+run "$dbc" "$work/command.log"
+check "commands decode: exit 0 (got $code: $(cat "$work/err"))" test "$code" -eq 0
+check "an arm command: its opcode and addressees, no set_deadband payload ($(head -1 "$work/out"))" \
+  test "$(head -1 "$work/out")" = "1.000000 vcan0 LeverCommand Opcode=1 ToHsi=1 ToTop=1"
+check "a set_deadband command: its payload ($(sed -n 2p "$work/out"))" \
+  test "$(sed -n 2p "$work/out")" = \
+  "1.001000 vcan0 LeverCommand Opcode=5 ToHsi=1 ToTop=1 Direction=1 Mode=0 P=0.1 Floor=0.8 FilterHz=1.0"
+
 # The log: a file, a FIFO or stdin; lines that are no frames are errors (exit 1), each named, the first 20.
 printf '(1.000000) vcan0 700#0100000000000000\n' >"$work/good.log"
 run "$dbc" "$work/good.log"

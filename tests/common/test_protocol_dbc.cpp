@@ -20,11 +20,13 @@ struct DbcSignal {
   unsigned start = 0, length = 0;
   bool little_endian = true, is_signed = false;
   double factor = 1, offset = 0, min = 0, max = 0;
+  int when = -1;  // multiplexed: present only when the message's multiplexor has this value
 };
 struct DbcMessage {
   std::uint32_t id = 0;
   unsigned dlc = 0;
   std::map<std::string, DbcSignal> signals;
+  std::string multiplexor;  // the signal marked M, if any
 };
 
 // sscanf rather than std::regex: GCC 12 reports a false -Wmaybe-uninitialized inside <regex> under ASan.
@@ -47,6 +49,22 @@ std::map<std::string, DbcMessage> parse_dbc(const std::string& path) {
                            &sign, &factor, &offset, &min, &max) == 9) {
       REQUIRE(current != nullptr);
       current->signals[name] = {start, length, order == '1', sign == '-', factor, offset, min, max};
+    } else if (char mux[16] = {};
+               std::sscanf(line.c_str(), " SG_ %63s %15s : %u|%u@%c%c (%lf,%lf) [%lf|%lf]", name, mux, &start, &length,
+                           &order, &sign, &factor, &offset, &min, &max) == 10) {
+      REQUIRE(current != nullptr);
+      int when = -1;
+      if (std::string(mux) == "M") {
+        REQUIRE(current->multiplexor.empty());
+        current->multiplexor = name;
+      } else {
+        REQUIRE(std::sscanf(mux, "m%d", &when) == 1);
+      }
+      current->signals[name] = {start, length, order == '1', sign == '-', factor, offset, min, max, when};
+    } else {
+      // No signal line goes unread (a comment on a signal, CM_ SG_, is no signal line).
+      const auto first = line.find_first_not_of(" \t");
+      REQUIRE((first == std::string::npos || line.compare(first, 3, "SG_") != 0));
     }
   }
   return out;
@@ -66,15 +84,25 @@ double dbc_value(const CanFrame& f, const DbcSignal& s) {
 
 using Expected = std::map<std::string, double>;
 
+// The signals a frame has by the DBC: a multiplexed one only when the multiplexor has its value.
+std::map<std::string, DbcSignal> present(const DbcMessage& dbc, const CanFrame& frame) {
+  std::map<std::string, DbcSignal> out;
+  const double selector = dbc.multiplexor.empty() ? -1 : dbc_value(frame, dbc.signals.at(dbc.multiplexor));
+  for (const auto& [name, signal] : dbc.signals)
+    if (signal.when < 0 || signal.when == selector) out[name] = signal;
+  return out;
+}
+
 void check_frame(const DbcMessage& dbc, const CanFrame& frame, const Expected& expected) {
   CHECK(frame.id == dbc.id);
   CHECK(frame.dlc == dbc.dlc);
+  const auto signals = present(dbc, frame);
   // Both sides name the same signals...
   for (const auto& entry : expected) {
     INFO(entry.first);
-    CHECK(dbc.signals.count(entry.first) == 1);
+    CHECK(signals.count(entry.first) == 1);
   }
-  for (const auto& [name, signal] : dbc.signals) {
+  for (const auto& [name, signal] : signals) {
     INFO(name);
     REQUIRE(expected.count(name) == 1);
     // ...and agree on every value, within the DBC's printed precision of the factor.
@@ -161,15 +189,32 @@ TEST_CASE("the C++ packers agree with lever.dbc bit for bit", "[protocol][dbc]")
     c.p = static_cast<std::uint16_t>(rng.next());
     c.floor = static_cast<std::uint16_t>(rng.next());
     c.filter_hz = static_cast<std::uint16_t>(rng.next());
-    check_frame(dbc.at("LeverCommand"), pack(c, 0),
-                {{"Opcode", static_cast<double>(c.opcode)},
-                 {"ToHsi", c.to_hsi},
-                 {"ToTop", c.to_top},
-                 {"Direction", static_cast<double>(c.direction)},
-                 {"Mode", static_cast<double>(c.mode)},
-                 {"P", c.p * kPLsb},
-                 {"Floor", c.floor * kFloorLsb},
-                 {"FilterHz", c.filter_hz * kFilterHzLsb}});
+    // The payload is set_deadband's alone: the DBC multiplexes it by the opcode.
+    Expected command{{"Opcode", static_cast<double>(c.opcode)}, {"ToHsi", c.to_hsi}, {"ToTop", c.to_top}};
+    if (c.opcode == Opcode::set_deadband) {
+      command.insert({{"Direction", static_cast<double>(c.direction)},
+                      {"Mode", static_cast<double>(c.mode)},
+                      {"P", c.p * kPLsb},
+                      {"Floor", c.floor * kFloorLsb},
+                      {"FilterHz", c.filter_hz * kFilterHzLsb}});
+    }
+    check_frame(dbc.at("LeverCommand"), pack(c, 0), command);
+  }
+}
+
+TEST_CASE("the command frame is multiplexed by its opcode in the DBC: set_deadband's payload, nothing else's",
+          "[protocol][dbc]") {
+  const auto dbc = parse_dbc(LEVER_DBC_PATH);
+  const auto& command = dbc.at("LeverCommand");
+  CHECK(command.multiplexor == "Opcode");
+  for (const char* payload : {"Direction", "Mode", "P", "Floor", "FilterHz"}) {
+    INFO(payload);
+    CHECK(command.signals.at(payload).when == static_cast<int>(Opcode::set_deadband));
+  }
+  for (const auto& [name, message] : dbc) {
+    if (name == "LeverCommand") continue;
+    INFO(name);
+    CHECK(message.multiplexor.empty());
   }
 }
 
