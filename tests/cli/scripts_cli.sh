@@ -24,7 +24,7 @@ refuses "scripts/sysroot with two architectures" "got 2 arguments" "$root/script
 refuses "scripts/man-pages without its directories" "BIN_DIR and OUT_DIR" "$root/scripts/man-pages"
 refuses "scripts/check-skips without a file" "JUNIT_XML" "$root/scripts/check-skips"
 refuses "scripts/failed-tests without a file" "JUNIT_XML" "$root/scripts/failed-tests"
-refuses "scripts/gauge-sensitivity --seeds two" "'two'" "$root/scripts/gauge-sensitivity" --seeds two
+refuses "hil/experiments/gauge-sensitivity --seeds two" "'two'" "$root/hil/experiments/gauge-sensitivity" --seeds two
 refuses "scripts/package with an unknown architecture" "'riscv64'" "$root/scripts/package" riscv64
 refuses "scripts/package with a fourth argument" "'extra'" "$root/scripts/package" amd64 b d extra
 refuses "scripts/cross-build with an unknown architecture" "'riscv64'" "$root/scripts/cross-build" riscv64
@@ -36,8 +36,8 @@ refuses "scripts/bench-bridge --variants old without --old" "needs --old" "$root
 refuses "scripts/bench-bridge --variants floor without the floor relay" "no lever-bench-relay-floor" \
   "$root/scripts/bench-bridge" --variants floor "$root"
 refuses "scripts/bench-bridge --variants ceiling" "'ceiling'" "$root/scripts/bench-bridge" --variants ceiling "$root"
-refuses "scripts/rate-table with a second argument" "'extra'" "$root/scripts/rate-table" dir extra
-refuses "scripts/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/scripts/hil-change-bounds-wall-tap" b 3 extra
+refuses "hil/experiments/rate-table with a second argument" "'extra'" "$root/hil/experiments/rate-table" dir extra
+refuses "hil/experiments/hil-change-bounds-wall-tap with a third argument" "'extra'" "$root/hil/experiments/hil-change-bounds-wall-tap" b 3 extra
 refuses "scripts/cpu-budget --shifts 5" "'5'" "$root/scripts/cpu-budget" --shifts 5
 refuses "scripts/cpu-budget --frobnicate" "--frobnicate" "$root/scripts/cpu-budget" --frobnicate
 refuses "scripts/demo with an argument" "'now'" "$root/scripts/demo" now

@@ -37,7 +37,7 @@ for doc in docs:
         continue
     a, b = text.index(begin) + len(begin), text.index(end)
     if text[a:b] != body:
-        failures.append(f"{doc}: its fidelity table is not docs/fidelity-table.md's (scripts/fidelity-table)")
+        failures.append(f"{doc}: its fidelity table is not docs/fidelity-table.md's (hil/experiments/fidelity-table)")
     prose = text[: a - len(begin)] + text[b + len(end):]
     prose = "\n".join(l for l in prose.splitlines() if not l.lstrip().startswith(("#", "|", "<!--")))
     prose = re.sub(r"\]\([^)]*\)", "]", prose)   # link targets
