@@ -10,6 +10,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "lever/platform/interface_name.hpp"
 #include "lever/platform/socketcan.hpp"
@@ -277,21 +278,22 @@ int main(int argc, char** argv) {
       "tare); 1 a lever refused or did not show it within the timeout (which, and why from its heartbeat or\n"
       "settings frame), or the CAN interface failed; 2 bad input (an option, an interface that does not exist).");
   Options o;
-  const std::pair<const char*, Verb> verbs[] = {{"arm", Verb::arm},     {"disarm", Verb::disarm},
-                                                {"rearm", Verb::rearm}, {"home", Verb::home},
-                                                {"tare", Verb::tare},   {"set-deadband", Verb::set_deadband}};
-  const char* what[] = {"arm both levers (each must be homed, with no fault latched)",
-                        "disarm both levers (ends a fault's safe behaviour; the faults stay latched)",
-                        "re-arm both levers: clears latched faults whose conditions are gone, and arms",
-                        "home both levers (the ones already homed stay as they are)",
-                        "tare the TOP's strain gauge (the lever disarmed and untouched)",
-                        "set one direction's deadband at its sending end (motion: the HSI, force: the TOP)"};
-  CLI::App* subs[6];
-  for (int i = 0; i < 6; ++i) {
-    subs[i] = app.add_subcommand(verbs[i].first, what[i]);
-    add_common(subs[i], o);
+  // Each command with what it does; its name is the protocol's (protocol::name of its opcode).
+  const std::pair<Verb, const char*> verbs[] = {
+      {Verb::arm, "arm both levers (each must be homed, with no fault latched)"},
+      {Verb::disarm, "disarm both levers (ends a fault's safe behaviour; the faults stay latched)"},
+      {Verb::rearm, "re-arm both levers: clears latched faults whose conditions are gone, and arms"},
+      {Verb::home, "home both levers (the ones already homed stay as they are)"},
+      {Verb::tare, "tare the TOP's strain gauge (the lever disarmed and untouched)"},
+      {Verb::set_deadband, "set one direction's deadband at its sending end (motion: the HSI, force: the TOP)"}};
+  std::vector<std::pair<CLI::App*, Verb>> subs;
+  CLI::App* deadband = nullptr;
+  for (const auto& [verb, what] : verbs) {
+    CLI::App* sub = app.add_subcommand(std::string(lever::ctl::verb_name(verb)), what);
+    add_common(sub, o);
+    subs.emplace_back(sub, verb);
+    if (verb == Verb::set_deadband) deadband = sub;
   }
-  CLI::App* deadband = subs[5];
   const program::Choices<protocol::Direction> directions{{"motion", protocol::Direction::motion},
                                                          {"force", protocol::Direction::force}};
   const auto modes = program::choices_of(lever::codec::kAllModes, lever::codec::name);
@@ -313,8 +315,8 @@ int main(int argc, char** argv) {
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
   Verb verb = Verb::arm;
-  for (int i = 0; i < 6; ++i)
-    if (subs[i]->parsed()) verb = verbs[i].second;
+  for (const auto& [sub, v] : subs)
+    if (sub->parsed()) verb = v;
   if (const auto problem = lever::platform::interface_name_problem(o.can))
     return fail(2, fmt::format("--can '{}': {}", program::printable(o.can), *problem));
 

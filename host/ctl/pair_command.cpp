@@ -10,23 +10,7 @@ using protocol::Fault;
 using protocol::HeartbeatMessage;
 using protocol::LeverState;
 
-std::string_view verb_name(Verb verb) noexcept {
-  switch (verb) {
-    case Verb::tare:
-      return "tare";
-    case Verb::home:
-      return "home";
-    case Verb::arm:
-      return "arm";
-    case Verb::disarm:
-      return "disarm";
-    case Verb::rearm:
-      return "rearm";
-    case Verb::set_deadband:
-      return "set-deadband";
-  }
-  return "?";
-}
+std::string_view verb_name(Verb verb) noexcept { return protocol::name(opcode(verb)); }
 
 protocol::Opcode opcode(Verb verb) noexcept {
   switch (verb) {

@@ -16,24 +16,6 @@ std::string value_or_dash(const std::optional<double>& v, const char* format) {
   return v ? fmt::format(fmt::runtime(format), *v) : std::string("-");
 }
 
-const char* opcode_name(protocol::Opcode op) noexcept {
-  switch (op) {
-    case protocol::Opcode::arm:
-      return "arm";
-    case protocol::Opcode::disarm:
-      return "disarm";
-    case protocol::Opcode::rearm:
-      return "rearm";
-    case protocol::Opcode::tare:
-      return "tare";
-    case protocol::Opcode::set_deadband:
-      return "set_deadband";
-    case protocol::Opcode::home:
-      return "home";
-  }
-  return "unknown";
-}
-
 std::string lever_state(const LeverView& lever) {
   if (!lever.heard) return "unheard";
   if (lever.silent()) return fmt::format("silent {:.1f}s", *lever.heartbeat_age_s);
@@ -187,7 +169,7 @@ std::vector<Line> render(const Snapshot& s, const ReaderState& reader, const Scr
   bool starred = false;
   for (const PairView& pair : s.pairs) {
     out.push_back({"", Tone::normal});
-    std::string last = pair.last_command ? fmt::format(", last {}", opcode_name(*pair.last_command)) : "";
+    std::string last = pair.last_command ? fmt::format(", last {}", protocol::name(*pair.last_command)) : "";
     out.push_back({fmt::format("pair {}  (commands seen {}{})", pair.pair, pair.commands, last), Tone::heading});
     out.push_back({fmt::format("  {:<4} {:<11} {:<5} {:>10} {:>10} {:>9} {:>9}  {:>11} {}", "", "state", "homed",
                                "pos rad", "vel rad/s", "force N", "torque Nm", "hb lost/late", "faults"),

@@ -6,7 +6,9 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
+#include <string_view>
 
 #include "lever/common/rng.hpp"
 #include "lever/protocol/messages.hpp"
@@ -246,4 +248,21 @@ TEST_CASE("the message set's table is the DBC's messages, and classify reads eve
   std::size_t expected = 0;
   for (const auto& m : kMessageSet) expected += id_count(m);
   CHECK(ids == expected);
+}
+
+TEST_CASE("every opcode the DBC allows has one name, and no two share it", "[protocol][dbc]") {
+  const auto dbc = parse_dbc(LEVER_DBC_PATH);
+  const auto& opcode = dbc.at("LeverCommand").signals.at("Opcode");
+  std::set<int> codes;
+  std::set<std::string_view> names;
+  for (const auto op : kAllOpcodes) {
+    codes.insert(static_cast<int>(op));
+    names.insert(name(op));
+    CHECK(name(op) != "unknown");
+  }
+  CHECK(names.size() == std::size(kAllOpcodes));
+  CHECK(codes.size() == std::size(kAllOpcodes));
+  CHECK(*codes.begin() == static_cast<int>(opcode.min));
+  CHECK(*codes.rbegin() == static_cast<int>(opcode.max));
+  CHECK(codes.size() == static_cast<std::size_t>(opcode.max - opcode.min + 1));
 }

@@ -232,6 +232,26 @@ struct HeartbeatMessage {
 
 // Stable numbers: on the wire.
 enum class Opcode : std::uint8_t { arm = 1, disarm = 2, rearm = 3, tare = 4, set_deadband = 5, home = 6 };
+inline constexpr Opcode kAllOpcodes[] = {Opcode::arm,  Opcode::disarm, Opcode::rearm,
+                                         Opcode::home, Opcode::tare,   Opcode::set_deadband};
+// A command's name, as lever-ctl takes it and the tools show it.
+constexpr std::string_view name(Opcode op) noexcept {
+  switch (op) {
+    case Opcode::arm:
+      return "arm";
+    case Opcode::disarm:
+      return "disarm";
+    case Opcode::rearm:
+      return "rearm";
+    case Opcode::tare:
+      return "tare";
+    case Opcode::set_deadband:
+      return "set-deadband";
+    case Opcode::home:
+      return "home";
+  }
+  return "unknown";
+}
 enum class Direction : std::uint8_t { motion = 0, force = 1 };
 
 struct CommandMessage {
