@@ -1,8 +1,8 @@
 // Change detection, not fidelity: the documented wall-tap and sphere-3dof tables (docs/hil-model.md) must stay
 // exactly where they were. The HIL gives the same bytes on every architecture (the cross test), so each row's
 // figures for seeds 1-3 are pinned exactly as `lever-hil run --json` reported them when
-// hil/experiments/hil-change-bounds-* last ran (tests/hil/change_detection_*.json). Any change to the model, the firmware
-// core or the codec that moves a single packet, tick of contact or JND-tick of one of those runs fails here,
+// hil/experiments/hil-change-bounds-* last ran (tests/hil/change_detection_*.json). Any change to the model, the
+// firmware core or the codec that moves a single packet, tick of contact or JND-tick of one of those runs fails here,
 // whether it moves toward the paper or away from it. When that is meant, rerun the scripts, update the docs' tables,
 // and say in the commit which figures moved and why. The wall-tap rows run the paper's setup (one controller, the
 // HSI's force loop) and are counted as the paper counts (the deadband's packets), with every data frame beside them.

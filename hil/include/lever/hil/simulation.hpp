@@ -5,10 +5,10 @@
 // stop and are armed by the host; the scenario's clock starts when both are armed. Deterministic: the same
 // configuration and seed give the same results, bit for bit.
 #include <cstdint>
-#include <string_view>
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lever/codec/config.hpp"
