@@ -140,6 +140,8 @@ getset_bad "--set a string without its quotes" "is no TOML value (a string needs
   --set board.can.interface=vcan3 --check-config
 getset_bad "--set an unknown key" "--set: codec.motion.q: unknown key" --set codec.motion.q=1 --check-config
 getset_bad "--set without =" "expected KEY=VALUE" --set codec.motion.p --check-config
+getset_bad "--set with --motor-off, which reads the file's motor keys alone" "excludes" \
+  --set board.motor.pwm_chip=1 --motor-off
 getset_bad "--set a wrong type" "--set: lever.pair: must be a whole number" --set 'lever.pair="one"' --check-config
 # The examples are every key at its default: they cannot drift from the program.
 for role in hsi top; do

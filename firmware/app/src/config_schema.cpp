@@ -235,14 +235,28 @@ std::optional<std::string> ConfigSchema::load_assignment(std::string_view assign
                        printable(assignment));
   const std::string key(assignment.substr(0, eq));
   const std::string text(assignment.substr(eq + 1));
-  toml::table parsed;
-  try {
-    parsed = toml::parse("v = " + text);
-  } catch (const toml::parse_error&) {
+  const auto parsed = parse_value(text);
+  if (!parsed)
     return fmt::format("{}: {}: '{}' is no TOML value (a string needs its quotes: \"vcan0\")", source, printable(key),
                        printable(text));
+  return load_value(key, *parsed->get("v"), source);
+}
+
+std::optional<toml::table> ConfigSchema::parse_value(std::string_view text) {
+  try {
+    return toml::parse("v = " + std::string(text));
+  } catch (const toml::parse_error&) {
+    return std::nullopt;
   }
-  return load_value(key, *parsed.get("v"), source);
+}
+
+std::optional<std::string> ConfigSchema::value_text(std::string_view key) const {
+  const auto printed = value(key);
+  if (!printed) return std::nullopt;
+  // The schema's own printing always parses; a string comes back bare.
+  const auto parsed = parse_value(*printed);
+  if (const auto bare = parsed ? (*parsed)["v"].value<std::string>() : std::nullopt) return *bare;
+  return printed;
 }
 
 std::optional<std::string> ConfigSchema::value(std::string_view key) const {

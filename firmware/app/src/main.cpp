@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   app.add_flag("--motor-off", motor_off,
                "stop the board's motor (PWM at duty 0 and enabled, driver enable line off) and exit: for the service "
                "manager after lever-fw ended, however it ended")
-      ->excludes("--check-config", "--get");
+      ->excludes("--check-config", "--get", "--set");
   app.add_flag("--kernel-check", kernel_check,
                "say which preemption model the kernel runs (the loop needs full or PREEMPT_RT) and exit 0: the "
                "service's ExecStartPre, unsandboxed, where lever-fw itself cannot read /proc/cmdline")
@@ -90,20 +90,13 @@ int main(int argc, char** argv) {
   }
   auto& config = loaded.config;
   if (app.count("--get") > 0) {
-    const auto value = app::schema_for(config).value(get_key);
+    const auto value = app::schema_for(config).value_text(get_key);
     if (!value) {
       fmt::print(stderr, "lever-fw: --get: no key '{}' (every key: lever-fw --config FILE --check-config)\n",
                  program::printable(get_key));
       return kBadInput;
     }
-    // A string bare, for a shell's use; every other TOML value is its own text. The text is the schema's own
-    // printing, so it parses; were it not to, it is printed as it is.
-    std::optional<std::string> bare;
-    try {
-      bare = toml::parse("v = " + *value)["v"].value<std::string>();
-    } catch (const toml::parse_error&) {
-    }
-    fmt::print("{}\n", bare.value_or(*value));
+    fmt::print("{}\n", *value);
     return 0;
   }
   if (check_config) {

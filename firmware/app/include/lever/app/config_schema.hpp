@@ -99,6 +99,8 @@ class ConfigSchema {
 
   // One key's effective value as a TOML value ("tcp" quoted, 25, true); nothing for a key the schema lacks.
   std::optional<std::string> value(std::string_view key) const;
+  // The same for a shell: a string without its quotes, every other value as its TOML text.
+  std::optional<std::string> value_text(std::string_view key) const;
 
   // The effective configuration as a TOML document, every key with its unit and documentation; with a prefix
   // ("board.motor."), only the keys that start with it.
@@ -116,6 +118,8 @@ class ConfigSchema {
                                                  std::int64_t& out);
   static std::optional<std::string> read_text(const toml::node& n, std::string& out);
   static std::string printable(std::string_view s);
+  // TEXT read as one TOML value (as a file's "key = TEXT" would be); nothing when it is none.
+  static std::optional<toml::table> parse_value(std::string_view text);
 
   std::vector<Field> fields_;
   std::map<std::string, std::size_t, std::less<>> index_;
