@@ -62,19 +62,14 @@ class SphereChannel {
   SphereChannel(const NetworkParams& lan, std::uint64_t seed) : link_(lan, seed) {}
 
   void send(const Payload& p, Nanos t_ns) { link_.send(table_.stamp(p), t_ns); }
-  // The datagrams arrived by t_ns wait in the playout (one older than the newest is stale: dropped, counted); then
-  // every packet whose sample time is `until` or earlier goes to accept(packet).
+  // The datagrams arrived by t_ns wait in the playout (one older than the newest, or one the playout has no room
+  // for, is stale: dropped, counted); then every packet whose sample time is `until` or earlier goes to
+  // accept(packet).
   template <typename Accept>
   void receive(Nanos t_ns, double until, Accept&& accept) {
-    TimedFrame arrived;
-    while (link_.pop_arrived(t_ns, arrived)) {
-      const Payload& p = table_.at(arrived.frame);
-      if (p.t <= newest_t_ || !playout_.push(p)) {
-        ++stale_;
-        continue;
-      }
-      newest_t_ = p.t;
-    }
+    receive_on_arrival(t_ns, [this](const Payload& p, Nanos) {
+      if (!playout_.push(p)) ++stale_;
+    });
     playout_.release(until, accept);
   }
   // Without a play-out: every datagram arrived by t_ns goes to accept(packet, arrival_ns) at once, in arrival order
