@@ -19,21 +19,11 @@ board_devices() {
   udevadm settle
 }
 
-# write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: the installed /etc/lever/ROLE.toml with this board's
-# devices (and the given keys, VALUE a TOML value) changed, as lever-fw resolves it (--set, --check-config);
-# $work/ROLE.toml is the same file, for serve and the bounds
-write_config() {
-  local role=$1 can=$2 file=$work/$1.toml; shift 2
-  cp "/etc/lever/$role.toml" "$work/$role.example"
-  local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role\"")
-  [[ $role == top ]] && sets+=(--set "board.motor.pwm_chip=$(pwm_chip top)")
-  while (($# >= 3)); do sets+=(--set "$1.$2=$3"); shift 3; done
-  lever-fw --config "$work/$role.example" "${sets[@]}" --check-config >"$file" ||
-    { echo "FAILED: lever-fw refused $role.toml's keys: ${sets[*]}" >&2; exit 1; }
-  install -m 0644 "$file" "/etc/lever/$role.toml"
-  echo "/etc/lever/$role.toml differs from the example in:"
-  diff <(lever-fw --config "$work/$role.example" --check-config | sed 1d) <(sed 1d "$file") | sed -n 's/^> /  /p'
-}
+# The levers' configurations (lever_sites_lib's write_config) start from the installed examples, as an admin's do,
+# copied before the first is replaced, and are installed where the units read them.
+examples=$work/examples
+mkdir -p "$examples" && cp /etc/lever/hsi.toml /etc/lever/top.toml "$examples/"
+installed_configs=/etc/lever
 
 # journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.
 # It polls with a cursor rather than following: a `journalctl -f -n 0` started just before its unit can miss all of

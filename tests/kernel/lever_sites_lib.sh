@@ -65,7 +65,8 @@ pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, n
 
 # write_config ROLE CAN_INTERFACE [SECTION KEY VALUE]...: $work/ROLE.toml, the example config with the devices
 # of this guest and the given keys changed (VALUE a TOML value), as lever-fw resolves it (--set, --check-config: each
-# key checked as in a file, every key written out); prints every key that differs from the example
+# key checked as in a file, every key written out), also installed in $installed_configs where a test sets it (the
+# board image's /etc/lever); prints every key that differs from the example
 write_config() {
   local role=$1 can=$2 file=$work/$1.toml; shift 2
   local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role\"")
@@ -73,7 +74,8 @@ write_config() {
   while (($# >= 3)); do sets+=(--set "$1.$2=$3"); shift 3; done
   "$bin/lever-fw" --config "$examples/$role.toml" "${sets[@]}" --check-config >"$file" ||
     { echo "FAILED: lever-fw refused $role.toml's keys: ${sets[*]}" >&2; exit 1; }
-  echo "$role.toml differs from the example in:"
+  [[ -z ${installed_configs:-} ]] || install -m 0644 "$file" "$installed_configs/$role.toml" || exit 1
+  echo "${installed_configs:+$installed_configs/}$role.toml differs from the example in:"
   diff <("$bin/lever-fw" --config "$examples/$role.toml" --check-config | sed 1d) <(sed 1d "$file") | sed -n 's/^> /  /p'
 }
 
