@@ -57,10 +57,13 @@ check "and neither lever's motor guard fired while both started" no_guard_fired 
 command vcan0 6
 require "home, sent at the HSI's site: the HSI homes" wait_for 120 hsi '.position_valid'
 require "and over the link, the TOP homes" wait_for 120 top '.position_valid'
+quiet_followers
 command vcan0 1
 require "arm at the HSI's site: both arm across the bridges (serve saw both armed heartbeats)" \
   wait_for_serve two-sites "both levers armed"
 wait "$serve_pid"; code=$?
+require "the followers read the journal again" \
+  resume_followers "$out/hsi.stats" "$out/top.stats" "$out/bridge-site-a.journal" "$out/bridge-site-b.journal"
 check "lever-hil serve ran its 15 s scenario and exited 0 (got $code)" test "$code" -eq 0
 r() { jq -r "$1" "$out/two-sites.report"; }
 check "both stayed armed through the scenario (armed $(r .armed_s) s)" test "$(r '.armed_s >= 14.5')" = true

@@ -21,9 +21,12 @@ check "and neither lever's motor guard fired while both started" no_guard_fired 
 command vcan0 6
 require "lever-ctl home: the HSI homes against its end stop" wait_for 120 hsi '.position_valid'
 require "lever-ctl home: the TOP homes against its end stop" wait_for 120 top '.position_valid'
+quiet_followers
 command vcan0 1
 require "lever-ctl arm: both arm (serve saw both armed heartbeats)" wait_for_serve one-site "both levers armed"
-check_one_site_run "$out/one-site.report"
+wait "$serve_pid"; code=$?
+require "the followers read the journal again" resume_followers "$out/hsi.stats" "$out/top.stats"
+check_one_site_run "$out/one-site.report" "$code"
 
 systemctl stop lever-fw@hsi lever-fw@top
 for role in hsi top; do

@@ -28,10 +28,29 @@ installed_configs=/etc/lever
 # journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.
 # It polls with a cursor rather than following: a `journalctl -f -n 0` started just before its unit can miss all of
 # its lines without a word; a cursor cannot skip a line, nor miss one written before it started.
+# While a scenario runs (quiet_followers ... resume_followers) it starts no journalctl: the rig's harness starts no
+# program while the levers run a scenario (tests/kernel/lever_sites_lib.sh), and on this image's voluntary-preemption
+# kernel an ordinary process's system calls can hold the loops (docs/deploy.md, "The board's kernel"); four
+# followers polling at 5 Hz were 20 programs a second beside the levers. The journal keeps the lines; the cursor
+# takes them up where it stopped.
 journal_lines() {
   while :; do
-    journalctl -q -u "$1" -o cat --cursor-file="$2"
+    [[ -e $work/followers-quiet ]] || journalctl -q -u "$1" -o cat --cursor-file="$2"
     sleep 0.2
+  done
+}
+quiet_followers() { : >"$work/followers-quiet"; }
+# resume_followers FILE...: the followers poll again, and each FILE (a follower's output) has grown: what the units
+# wrote during the scenario is read before the checks that follow (status lines come every second)
+resume_followers() {
+  local file sizes=() i deadline=$((SECONDS + 10))
+  for file in "$@"; do sizes+=("$(stat -c %s "$file" 2>/dev/null || echo 0)"); done
+  rm -f "$work/followers-quiet"
+  for i in "${!sizes[@]}"; do
+    while (($(stat -c %s "${@:i+1:1}" 2>/dev/null || echo 0) <= sizes[i])); do
+      ((SECONDS < deadline)) || { echo "FAILED: ${@:i+1:1} did not grow within 10 s of the followers' resuming" >&2; return 1; }
+      sleep 0.2
+    done
   done
 }
 

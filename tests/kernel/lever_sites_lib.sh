@@ -239,12 +239,13 @@ stat_true() { last_line "$out/$1.stats" 2>/dev/null | jq_true - "$2"; }
 
 # check_one_site_report REPORT: the one-site scenario's bounds on serve's report (lever_one_site.sh, and the same
 # pair under systemd on the board image, tests/image/pair_units.sh)
-# check_one_site_run REPORT: serve's 15 s scenario ended (waited for without a poll: no program is started while
-# it runs, for repeatability), its report within lever_one_site's bounds, no encoder edge lost, and the motors
-# driven through the kernel's PWM core to the (simulated) controllers, whose outputs serve read back as torques.
+# check_one_site_run REPORT [CODE]: serve's 15 s scenario ended (waited for without a poll: no program is started
+# while it runs, for repeatability; CODE is its exit status where the caller waited), its report within
+# lever_one_site's bounds, no encoder edge lost, and the motors driven through the kernel's PWM core to the
+# (simulated) controllers, whose outputs serve read back as torques.
 check_one_site_run() {
-  local code role hw_enabled hw_period hw_duty hw_polarity hw_applies hw_last_ns
-  wait "$serve_pid"; code=$?
+  local code=${2-} role hw_enabled hw_period hw_duty hw_polarity hw_applies hw_last_ns
+  [[ -n $code ]] || { wait "$serve_pid"; code=$?; }
   check "lever-hil serve ran its 15 s scenario and exited 0 (got $code)" test "$code" -eq 0
   check_one_site_report "$1"
   check "no encoder edge lost" test "$(last_stat hsi .encoder.lost)/$(last_stat top .encoder.lost)" = 0/0
