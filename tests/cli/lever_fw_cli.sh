@@ -48,6 +48,23 @@ bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, inde
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
 bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
 bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
+# Relations that make a fault certain at rest (issue 40, item 5), each at its edge, and the value just past it taken.
+bad_config "COMMS certain at rest" "link.comms_timeout_ms: 25 ms is not longer than the gap between the peer's frames at rest (25 ms" \
+  $'[link]\ncomms_timeout_ms = 25'
+bad_config "COMMS certain at rest, the refresh the shorter gap" "link.comms_timeout_ms: 40 ms is not longer than the gap between the peer's frames at rest (40 ms" \
+  $'[link]\nheartbeat_ms = 50\nrefresh_ms = 40\ncomms_timeout_ms = 40'
+bad_config "homing that must time out" "homing.timeout_ms: 100 ms is not longer than homing.stall_ms (100 ms)" \
+  $'[homing]\ntimeout_ms = 100'
+bad_config "POSITION_LIMIT certain once homed" "homing.home_position_rad: -1.01 rad is outside safety.position_min_rad..position_max_rad (-1 to" \
+  $'[homing]\nhome_position_rad = -1.01'
+for relation in $'[link]\ncomms_timeout_ms = 26' $'[homing]\ntimeout_ms = 101' $'[homing]\nhome_position_rad = -1.0' \
+  $'[homing]\nmethod = "absolute"\nhome_position_rad = -1.01'; do
+  printf '%s\n' "$relation" >"$work/edge.toml"
+  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
+  code=$?
+  check "just inside the relation, taken: ${relation//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" \
+    test "$code" -eq 0 -a ! -s "$work/err"
+done
 bad_config "a gauge staler than its polls" "gauge.stale_ms: 5 ms does not outlast one missed poll" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
 # The gauge's timings as a relation: one missed poll costs a response timeout, RTU's a backoff more.
 bad_config "a stale window one missed poll reaches" \

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <optional>
+#include <string>
 
 #include "lever/program/choices.hpp"
 #include "lever/program/text.hpp"
@@ -127,6 +129,41 @@ platform::BoardCanPortConfig can_config(const FwConfig& config) {
   c.link_retry_max_ms = static_cast<std::uint32_t>(config.board.can_link_retry_max_ms);
   return c;
 }
+
+namespace {
+
+// Relations between keys that make a fault certain at rest, which no key's own range can refuse.
+struct RelationProblem {
+  std::string keys, text;
+};
+std::optional<RelationProblem> certain_fault_at_rest(const fw::LeverConfig& l) {
+  // At rest the peer's heartbeats and data refreshes are the frames that feed the comms watchdog; a peer configured
+  // alike sends one at least every min(heartbeat, refresh), and a frame spends at least a tick in transit.
+  const auto gap = std::min(l.heartbeat_period, l.refresh_period);
+  if (l.comms_timeout <= gap)
+    return RelationProblem{"link.comms_timeout_ms",
+                           fmt::format("{} ms is not longer than the gap between the peer's frames at rest ({} ms: "
+                                       "link.heartbeat_ms and link.refresh_ms, a peer configured alike): COMMS would "
+                                       "latch at rest",
+                                       l.comms_timeout, gap)};
+  const auto& h = l.homing;
+  if (h.method == fw::HomingMethod::absolute) return std::nullopt;
+  // The stop is recognised only after stall_ms at it.
+  if (h.timeout_ticks <= h.stall_ticks)
+    return RelationProblem{"homing.timeout_ms", fmt::format("{} ms is not longer than homing.stall_ms ({} ms): every "
+                                                            "homing would time out before it could see the stop",
+                                                            h.timeout_ticks, h.stall_ticks)};
+  // Homing ends with the lever at home_position_rad, and the range is checked from then on.
+  if (h.home_position_rad < l.position_min_rad || h.home_position_rad > l.position_max_rad)
+    return RelationProblem{
+        "homing.home_position_rad",
+        fmt::format("{} rad is outside safety.position_min_rad..position_max_rad ({} to {} rad): POSITION_LIMIT "
+                    "would latch the moment homing ends",
+                    h.home_position_rad, l.position_min_rad, l.position_max_rad)};
+  return std::nullopt;
+}
+
+}  // namespace
 
 ConfigSchema schema_for(FwConfig& config) {
   ConfigSchema s;
@@ -346,6 +383,7 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   if (l.homing.torque_limit_nm > l.torque_limit_nm)
     return fail("homing.torque_limit_nm", "must not exceed safety.torque_limit_nm");
   if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
+  if (auto problem = certain_fault_at_rest(l)) return fail(problem->keys, problem->text);
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
   if (const auto gap = platform::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
