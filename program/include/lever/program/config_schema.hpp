@@ -16,7 +16,7 @@
 #endif
 #include <toml++/toml.h>
 
-namespace lever::app {
+namespace lever::program {
 
 class ConfigSchema {
  public:
@@ -125,4 +125,4 @@ class ConfigSchema {
   std::map<std::string, std::size_t, std::less<>> index_;
 };
 
-}  // namespace lever::app
+}  // namespace lever::program

@@ -1,4 +1,4 @@
-#include "lever/app/config_schema.hpp"
+#include "lever/program/config_schema.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include "lever/program/numbers.hpp"
 #include "lever/program/text.hpp"
 
-namespace lever::app {
+namespace lever::program {
 namespace {
 
 std::string type_name(const toml::node& n) {
@@ -290,4 +290,4 @@ std::string ConfigSchema::print(std::string_view prefix) const {
   return out;
 }
 
-}  // namespace lever::app
+}  // namespace lever::program
