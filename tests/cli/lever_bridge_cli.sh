@@ -103,6 +103,17 @@ printf '\xef\xbb\xbfcan = "vcan0"\n' >"$work/etc/bom.toml"
 run --config "$work/etc/bom.toml" --check-config
 check "a config with a UTF-8 BOM is read (exit 2 for the missing bind, got $code)" grep -q "bind (key 'bind') is required" "$work/io/err"
 
+# ---- --get: one key's effective value, what scripts read a configuration with ----
+run --config "$work/etc/rt.toml" --get key; ok "--get key"
+check "--get key: the path from the config's directory, without quotes" test "$(cat "$work/io/out")" == "$work/etc/site.key"
+run --config "$work/etc/bridge.toml" --get site_id; ok "--get an unset key"
+check "--get an unset key: an empty line" test "$(cat "$work/io/out")" == ""
+run --config "$work/etc/rt.toml" --get site_id --site-id 7; ok "--get a key the command line sets"
+check "--get: the command line wins over the file" test "$(cat "$work/io/out")" == "7"
+expect_bad "--get an unknown key" "--get: no key 'nope'; the keys: can, bind, peer" --config "$work/etc/bridge.toml" --get nope
+expect_bad "--get with --check-config" "excludes" --config "$work/etc/bridge.toml" --get peer --check-config
+expect_bad "--get on a configuration that is not valid" "--key is required" "${net[@]}" --get peer
+
 # ---- The TOML file: each value refused at load, naming the file, the key and the value or its type ----
 toml_bad() {  # toml_bad NAME MESSAGE LINE
   printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n%s\n' "$3" \
