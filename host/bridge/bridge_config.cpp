@@ -8,151 +8,107 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 
 #include "lever/platform/interface_name.hpp"
 #include "lever/platform/udp_socket.hpp"
 #include "lever/program/config_file.hpp"
+#include "lever/program/config_schema.hpp"
 #include "shown_value.hpp"
-
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
 
 namespace lever::bridge {
 namespace {
 
-// Far beyond any real configuration (a few hundred bytes), and small enough to read whole.
-// A value from the file, as the user wrote it, cut short: it is echoed into a one-line message.
-std::string shown(const toml::node& node) {
-  std::string text;
-  if (const auto s = node.value_exact<std::string>()) {
-    text = fmt::format("'{}'", *s);
-  } else if (const auto i = node.value_exact<std::int64_t>()) {
-    text = fmt::format("{}", *i);
-  } else if (const auto d = node.value_exact<double>()) {
-    text = fmt::format("{}", *d);
-  } else if (const auto b = node.value_exact<bool>()) {
-    text = *b ? "true" : "false";
-  } else {
-    text = fmt::format("a {}", node.type() == toml::node_type::table ? "table" : "list");
-  }
-  return shown_value(text);
+using program::ConfigSchema;
+
+constexpr double kBytesPerMb = 1024.0 * 1024.0;
+
+// Relative to the configuration file: the working directory of a service is not where its files are.
+std::filesystem::path from_file(const std::string& text, const std::filesystem::path& file) {
+  const std::filesystem::path given(text);
+  return given.is_absolute() ? given : file.parent_path() / given;
+}
+
+// None yet is unset: "" would not load back.
+std::optional<std::string> path_text(const std::filesystem::path& p) {
+  if (p.empty()) return std::nullopt;
+  return ConfigSchema::quoted(p.string());
+}
+
+void allow_keys(ConfigSchema& s, BridgeConfig& c) {
+  const auto list = [](const AllowList& a) { return ConfigSchema::quoted(a.describe()); };
+  // Before the two it sets, so that either overrides it wherever it stands in the file.
+  s.parsed_text(
+      "allow", "CAN ids allowed both ways, hex ids and ranges: 0x100-0x1FF,0x700 (the two keys below override it)",
+      [&c](const std::string& t, const auto&) { c.allow_to_network = c.allow_from_network = AllowList::parse(t); },
+      [&c, list]() -> std::optional<std::string> {
+        if (c.allow_to_network.describe() != c.allow_from_network.describe()) return std::nullopt;
+        return list(c.allow_to_network);
+      });
+  s.parsed_text(
+      "allow_to_network", "CAN ids relayed from the bus to the peer",
+      [&c](const std::string& t, const auto&) { c.allow_to_network = AllowList::parse(t); },
+      [&c, list] { return list(c.allow_to_network); });
+  s.parsed_text(
+      "allow_from_network", "CAN ids relayed from the peer onto the bus",
+      [&c](const std::string& t, const auto&) { c.allow_from_network = AllowList::parse(t); },
+      [&c, list] { return list(c.allow_from_network); });
+}
+
+std::optional<std::string> load_rotate_mb(const toml::node& n, BridgeConfig& c) {
+  double mb = 0.0;
+  // 1 TB: beyond any disk this writes to, and far from overflowing the byte count.
+  if (auto e = ConfigSchema::read_number(n, 0.0, 1e6, "MB", mb)) return e;
+  c.record_rotate_bytes = static_cast<std::uint64_t>(mb * kBytesPerMb);
+  return std::nullopt;
+}
+
+void record_keys(ConfigSchema& s, BridgeConfig& c) {
+  s.parsed_text(
+      "record", "candump -L log of every frame both ways; relative: from this file's directory",
+      [&c](const std::string& t, const std::filesystem::path& file) { c.record = from_file(t, file); },
+      [&c] { return c.record ? path_text(*c.record) : std::nullopt; });
+  s.text("record_network_interface", c.record_network_interface,
+         "interface name written for frames from the network (unset: the CAN interface)", ConfigSchema::Empty::refused);
+  s.custom(
+      "record_rotate_mb", "MB", "a new recording file at this size (0: never)",
+      [&c](const toml::node& n) { return load_rotate_mb(n, c); },
+      [&c] { return ConfigSchema::number_text(static_cast<double>(c.record_rotate_bytes) / kBytesPerMb); });
+  s.integer("record_keep_files", c.record_keep_files, 1, 1000, "", "recording files kept when rotating");
 }
 
 }  // namespace
 
-void load_config_file(const std::filesystem::path& file, BridgeConfig& c) {
-  const auto read = program::read_config_file(file.string());
-  if (!read.error.empty()) throw std::invalid_argument(read.error);
-  toml::table t;
-  try {
-    t = toml::parse(read.text, file.string());
-  } catch (const toml::parse_error& e) {
-    throw std::invalid_argument(fmt::format("{}:{}: {}", file.string(), e.source().begin.line, e.description()));
-  }
-  auto fail = [&](std::string_view key, std::string_view problem) {
-    return std::invalid_argument(fmt::format("{}: key '{}': {}", file.string(), key, problem));
-  };
-  static constexpr std::string_view kKnown[] = {"can",
-                                                "bind",
-                                                "peer",
-                                                "key",
-                                                "allow",
-                                                "allow_to_network",
-                                                "allow_from_network",
-                                                "record",
-                                                "record_network_interface",
-                                                "record_rotate_mb",
-                                                "record_keep_files",
-                                                "stats_json",
-                                                "stats_interval_s",
-                                                "probe_interval_s",
-                                                "can_bitrate",
-                                                "site_id",
-                                                "peer_site_id",
-                                                "realtime_priority"};
-  for (const auto& [key, value] : t) {
-    bool known = false;
-    for (const auto k : kKnown) known = known || key.str() == k;
-    if (!known) throw fail(shown_value(key.str()), "unknown key");
-  }
-  auto text = [&](std::string_view key) -> std::optional<std::string> {
-    const auto node = t[key];
-    if (!node) return std::nullopt;
-    const auto s = node.value_exact<std::string>();
-    if (!s) throw fail(key, fmt::format("expected a string, got {}", shown(*node.node())));
-    if (s->empty()) throw fail(key, "must not be empty");
-    return *s;
-  };
-  // A real number: finite and in [low, high]. NaN fails every comparison, so the test is written to refuse it.
-  auto real = [&](std::string_view key, double low, double high, std::string_view what) -> std::optional<double> {
-    const auto node = t[key];
-    if (!node) return std::nullopt;
-    const auto v = node.value<double>();  // an integer converts
-    if (!v || !std::isfinite(*v) || !(low <= *v && *v <= high)) {
-      throw fail(key, fmt::format("must be {}, got {}", what, shown(*node.node())));
-    }
-    return *v;
-  };
-  // An integer: a TOML integer, or a float with no fraction (1e6).
-  auto integer = [&](std::string_view key, std::int64_t low, std::int64_t high) -> std::optional<std::int64_t> {
-    const auto node = t[key];
-    if (!node) return std::nullopt;
-    std::optional<std::int64_t> value = node.value_exact<std::int64_t>();
-    if (const auto d = node.value_exact<double>();
-        !value && d && std::isfinite(*d) && std::trunc(*d) == *d && std::fabs(*d) < 9e15) {
-      value = static_cast<std::int64_t>(*d);
-    }
-    if (!value || *value < low || *value > high) {
-      throw fail(key, fmt::format("must be an integer from {} to {}, got {}", low, high, shown(*node.node())));
-    }
-    return value;
-  };
-  auto allow = [&](std::string_view key) -> std::optional<AllowList> {
-    const auto s = text(key);
-    if (!s) return std::nullopt;
-    try {
-      return AllowList::parse(*s);
-    } catch (const std::invalid_argument& e) {
-      throw fail(key, e.what());
-    }
-  };
-  // Relative to the configuration file: the working directory of a service is not where its files are.
-  auto path = [&](const std::string& p) {
-    const std::filesystem::path given(p);
-    return given.is_absolute() ? given : file.parent_path() / given;
-  };
-  if (const auto v = text("can")) c.can_interface = *v;
-  if (const auto v = text("bind")) c.bind = *v;
-  if (const auto v = text("peer")) c.peer = *v;
-  if (const auto v = text("key")) c.key_file = path(*v);
-  if (const auto v = allow("allow")) c.allow_to_network = c.allow_from_network = *v;
-  if (const auto v = allow("allow_to_network")) c.allow_to_network = *v;
-  if (const auto v = allow("allow_from_network")) c.allow_from_network = *v;
-  if (const auto v = text("record")) c.record = path(*v);
-  if (const auto v = text("record_network_interface")) c.record_network_interface = *v;
-  // 1 TB: beyond any disk this writes to, and far from overflowing the byte count.
-  if (const auto v = real("record_rotate_mb", 0, 1e6, "a size in MB from 0 (never rotate) to 1000000")) {
-    c.record_rotate_bytes = static_cast<std::uint64_t>(*v * 1024 * 1024);
-  }
-  if (const auto v = integer("record_keep_files", 1, 1000)) c.record_keep_files = static_cast<int>(*v);
-  if (const auto node = t["stats_json"]) {
-    const auto b = node.value_exact<bool>();
-    if (!b) throw fail("stats_json", fmt::format("expected true or false, got {}", shown(*node.node())));
-    c.stats_json = *b;
-  }
-  if (const auto v = real("stats_interval_s", 0.01, 3600, "a time in seconds from 0.01 to 3600")) {
-    c.stats_interval_s = *v;
-  }
-  if (const auto v = real("probe_interval_s", 0.01, 3600, "a time in seconds from 0.01 to 3600")) {
-    c.probe_interval_s = *v;
-  }
+ConfigSchema schema_for(BridgeConfig& c) {
+  using Empty = ConfigSchema::Empty;
+  ConfigSchema s;
+  s.text("can", c.can_interface, "SocketCAN interface, e.g. can0 or vcan0", Empty::refused);
+  s.text("bind", c.bind, "local UDP address, HOST:PORT or [IPv6]:PORT", Empty::refused);
+  s.text("peer", c.peer, "the other bridge's UDP address (one unicast address)", Empty::refused);
+  s.parsed_text(
+      "key", "pre-shared key file (64 hex digits, mode 0600); relative: from this file's directory",
+      [&c](const std::string& t, const std::filesystem::path& file) { c.key_file = from_file(t, file); },
+      [&c] { return path_text(c.key_file); });
+  allow_keys(s, c);
+  record_keys(s, c);
+  s.boolean("stats_json", c.stats_json, "a JSON line of statistics every stats_interval_s");
+  s.number("stats_interval_s", c.stats_interval_s, 0.01, 3600.0, "s", "statistics period");
+  s.number("probe_interval_s", c.probe_interval_s, 0.01, 3600.0, "s", "clock-offset probe period");
   // Classic CAN's range of bit rates; a bit rate is a whole number of bits per second.
-  if (const auto v = integer("can_bitrate", 10'000, 1'000'000)) c.can_bitrate = static_cast<double>(*v);
-  if (const auto v = integer("site_id", 0, 255)) c.site_id = static_cast<std::uint8_t>(*v);
-  if (const auto v = integer("peer_site_id", 0, 255)) c.peer_site_id = static_cast<std::uint8_t>(*v);
-  if (const auto v = integer("realtime_priority", 0, 99)) c.realtime_priority = static_cast<int>(*v);
+  s.integer("can_bitrate", c.can_bitrate, 10'000, 1'000'000, "bit/s", "the bus's bit rate, for bus_load only");
+  s.integer("site_id", c.site_id, 0, 255, "", "this end's id in datagrams (unset: random at start-up)");
+  s.integer("peer_site_id", c.peer_site_id, 0, 255, "",
+            "datagrams carrying another sender id are refused (unset: any id but our own)");
+  s.integer("realtime_priority", c.realtime_priority, 0, 99, "",
+            "SCHED_FIFO priority of the two relay threads (0: normal scheduling)");
+  return s;
+}
+
+void load_config_file(const std::filesystem::path& file, BridgeConfig& config) {
+  // Into a copy: the keys before a problem would otherwise be applied and the rest not.
+  BridgeConfig loaded = config;
+  if (auto e = schema_for(loaded).load_file(file.string())) throw std::invalid_argument(*e);
+  config = loaded;
 }
 
 namespace {

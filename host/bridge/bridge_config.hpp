@@ -9,6 +9,10 @@
 
 #include "allow_list.hpp"
 
+namespace lever::program {
+class ConfigSchema;  // lever/program/config_schema.hpp: only what reads or prints the file needs it
+}
+
 namespace lever::bridge {
 
 // The relay threads' SCHED_FIFO priority unless told otherwise: above every ordinary task, below the kernel's
@@ -37,9 +41,14 @@ struct BridgeConfig {
   int realtime_priority = kDefaultRealtimePriority;  // the relay threads' SCHED_FIFO priority; 0: normal policy
 };
 
-// Reads the TOML file's keys into `config` (the command line is applied afterwards by the caller). Relative paths
-// in the file (key, record) are taken from the file's directory, so a configuration can be moved with its key.
-// Throws std::invalid_argument with the file, key, value and problem.
+// The configuration file's keys, bound to `config`'s fields: each key's type, range, unit and line of
+// documentation, for reading the file and for printing a configuration. Relative paths in the file (key, record)
+// are taken from the file's directory, so a configuration can be moved with its key.
+program::ConfigSchema schema_for(BridgeConfig& config);
+
+// Reads the TOML file's keys into `config` (the command line is applied afterwards by the caller); on a problem,
+// `config` is left as it was. Throws std::invalid_argument: "FILE: KEY: problem", or "FILE:LINE: problem" for
+// the TOML syntax.
 void load_config_file(const std::filesystem::path& file, BridgeConfig& config);
 
 // The checks that need the whole configuration (file and command line merged): required settings, the interface

@@ -14,8 +14,10 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "key.hpp"
+#include "lever/program/config_schema.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
+#include "lever/program/text.hpp"
 #include "relay.hpp"
 #include "shown_value.hpp"
 
@@ -65,7 +67,7 @@ int keygen(const std::string& out) {
 // What the command line says; each option left out leaves the configuration file's value (or the default).
 struct CommandLine {
   std::string config_file;
-  std::optional<std::string> can, bind, peer, key_file, allow, record;
+  std::optional<std::string> can, bind, peer, key_file, allow, record, get_key;
   std::optional<int> site_id, peer_site_id, realtime_priority;
   bool stats_json = false, insecure = false, check_only = false;
   CLI::App* keygen = nullptr;
@@ -103,6 +105,10 @@ void add_options(CLI::App& app, CommandLine& o) {
   app.add_flag("--check-config", o.check_only,
                "check the options, the configuration file and the key, print the result and exit (0 valid, 2 "
                "not); opens no CAN interface and no socket");
+  app.add_option("--get", o.get_key,
+                 "check as --check-config does and print one configuration key's effective value, the file's or the "
+                 "command line's (a string without its quotes, an unset one as an empty line): --get peer")
+      ->excludes("--check-config");
   o.keygen = app.add_subcommand(
       "keygen", "make a new random key: with --out, a new file of mode 0600 (never overwriting one); else stdout");
   o.keygen->add_option("--out", o.keygen_out, "the key file to create ('-': stdout)");
@@ -149,6 +155,19 @@ BridgeConfig resolve(const CommandLine& o) {
   return config;
 }
 
+// --get KEY: what scripts read a configuration with, so that none parses TOML of its own.
+int print_key(BridgeConfig config, const std::string& key) {
+  const auto schema = schema_for(config);
+  const auto value = schema.value_text(key);
+  if (!value) {
+    std::string keys;
+    for (const auto& k : schema.keys("")) keys += (keys.empty() ? "" : ", ") + k;
+    return fail(kBadInput, fmt::format("--get: no key '{}'; the keys: {}", lever::program::printable(key), keys));
+  }
+  fmt::print("{}\n", *value);
+  return 0;
+}
+
 // The key the configuration names, or with --insecure the public one, said loudly.
 Key key_for(const BridgeConfig& config) {
   if (!config.insecure) return load_key_file(config.key_file);
@@ -192,6 +211,7 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return fail(kBadInput, e.what());
   }
+  if (options.get_key) return print_key(config, *options.get_key);
   if (options.check_only) {
     fmt::print("lever-bridge: configuration valid: {} <-> {} -> {}, key {}, allow to network {}, from network {}\n",
                config.can_interface, config.bind, config.peer,

@@ -6,6 +6,7 @@
 #include "allow_list.hpp"
 #include "bridge_config.hpp"
 #include "bridge_stats.hpp"
+#include "lever/program/config_schema.hpp"
 #include "lever/protocol/messages.hpp"
 
 using namespace lever::bridge;
@@ -76,11 +77,11 @@ site_id = 7
 
   BridgeConfig d;
   CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-bad1.toml", "cann = \"vcan0\"\n"), d),
-                    Catch::Contains("key 'cann': unknown key"));
+                    Catch::Contains("lever-bridge-bad1.toml: cann: unknown key"));
   CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-bad2.toml", "site_id = 300\n"), d),
-                    Catch::Contains("'site_id'"));
+                    Catch::Contains("site_id: "));
   CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-bad3.toml", "can = 5\n"), d),
-                    Catch::Contains("expected a string"));
+                    Catch::Contains("can: must be a string, got an integer"));
   CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-bad4.toml", "can = \"vcan0\nbind=\n"), d),
                     Catch::Contains("lever-bridge-bad4.toml:"));
   CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-bad5.toml", "allow = \"0x900\"\n"), d),
@@ -94,25 +95,25 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
     CAPTURE(content);
     CHECK_THROWS_WITH(load_config_file(write_temp("lever-bridge-number.toml", content), c), Catch::Contains(message));
   };
-  refused("stats_interval_s = nan\n", "key 'stats_interval_s': must be a time in seconds from 0.01 to 3600, got nan");
-  refused("probe_interval_s = inf\n", "key 'probe_interval_s': must be a time in seconds from 0.01 to 3600, got inf");
+  refused("stats_interval_s = nan\n", "stats_interval_s: must be a number of s in [0.01, 3600], got nan");
+  refused("probe_interval_s = inf\n", "probe_interval_s: must be a number of s in [0.01, 3600], got inf");
   refused("probe_interval_s = 0.001\n", "got 0.001");
-  refused("record_rotate_mb = nan\n", "key 'record_rotate_mb'");
+  refused("record_rotate_mb = nan\n", "record_rotate_mb: ");
   refused("record_rotate_mb = -1\n", "got -1");
   refused("record_rotate_mb = 1e300\n", "got 1e+300");
-  refused("record_keep_files = 2.5\n", "key 'record_keep_files': must be an integer from 1 to 1000, got 2.5");
+  refused("record_keep_files = 2.5\n", "record_keep_files: must be a whole number in [1, 1000], got 2.5");
   refused("record_keep_files = nan\n", "got nan");
-  refused("can_bitrate = 500000.5\n", "key 'can_bitrate': must be an integer from 10000 to 1000000, got 500000.5");
-  refused("can_bitrate = nan\n", "key 'can_bitrate'");
-  refused("site_id = 2.5\n", "key 'site_id': must be an integer from 0 to 255, got 2.5");
+  refused("can_bitrate = 500000.5\n", "can_bitrate: must be a whole number in [10000, 1000000], got 500000.5");
+  refused("can_bitrate = nan\n", "can_bitrate: ");
+  refused("site_id = 2.5\n", "site_id: must be a whole number in [0, 255], got 2.5");
   refused("site_id = -1\n", "got -1");
-  refused("peer_site_id = 256\n", "key 'peer_site_id': must be an integer from 0 to 255, got 256");
-  refused("realtime_priority = -1\n", "key 'realtime_priority': must be an integer from 0 to 99, got -1");
+  refused("peer_site_id = 256\n", "peer_site_id: must be a whole number in [0, 255], got 256");
+  refused("realtime_priority = -1\n", "realtime_priority: must be a whole number in [0, 99], got -1");
   refused("realtime_priority = 100\n", "got 100");
-  refused("site_id = \"7\"\n", "got '7'");
-  refused("stats_json = 1\n", "key 'stats_json': expected true or false, got 1");
-  refused("can = \"\"\n", "key 'can': must not be empty");
-  refused("allow = \"\"\n", "key 'allow'");
+  refused("site_id = \"7\"\n", "site_id: must be a whole number in [0, 255], got a string");
+  refused("stats_json = 1\n", "stats_json: must be true or false, got an integer");
+  refused("can = \"\"\n", "can: must not be empty");
+  refused("allow = \"\"\n", "allow: must not be empty");
 
   BridgeConfig c;
   load_config_file(write_temp("lever-bridge-numbers-ok.toml",
@@ -123,11 +124,57 @@ TEST_CASE("config numbers: NaN, infinities and fractions are refused at load, na
   CHECK(c.realtime_priority == 70);
   REQUIRE(c.peer_site_id);
   CHECK(*c.peer_site_id == 1);
+  // The ends of each range are in it.
+  load_config_file(write_temp("lever-bridge-ends.toml", "site_id = 255\npeer_site_id = 0\nrealtime_priority = 99\n"),
+                   c);
+  CHECK(c.site_id == std::uint8_t{255});
+  CHECK(c.peer_site_id == std::uint8_t{0});
+  CHECK(c.realtime_priority == 99);
 
   BridgeConfig defaults;
   CHECK(defaults.realtime_priority == 40);  // real time unless told otherwise
   load_config_file(write_temp("lever-bridge-no-realtime.toml", "realtime_priority = 0\n"), defaults);
   CHECK(defaults.realtime_priority == 0);  // 0: normal scheduling
+}
+
+TEST_CASE("config allow: the two directions' keys override it, wherever they stand in the file", "[bridge][config]") {
+  BridgeConfig c;
+  load_config_file(write_temp("lever-bridge-allow.toml", "allow_to_network = \"0x100\"\nallow = \"0x200-0x201\"\n"), c);
+  CHECK(c.allow_to_network.describe() == "0x100");
+  CHECK(c.allow_from_network.describe() == "0x200-0x201");
+  BridgeConfig both;
+  load_config_file(write_temp("lever-bridge-allow.toml", "allow = \"0x300\"\n"), both);
+  CHECK(both.allow_to_network.describe() == "0x300");
+  CHECK(both.allow_from_network.describe() == "0x300");
+}
+
+TEST_CASE("config: a refused file changes nothing, and the printed schema reads back", "[bridge][config]") {
+  BridgeConfig c;
+  CHECK_THROWS(load_config_file(write_temp("lever-bridge-half.toml", "can = \"vcan0\"\nsite_id = 300\n"), c));
+  CHECK(c.can_interface.empty());  // the key before the problem was not applied
+
+  load_config_file(write_temp("lever-bridge-print.toml", R"(
+can = "vcan0"
+bind = "127.0.0.1:5000"
+peer = "127.0.0.1:5001"
+key = "/etc/lever/site.key"
+allow_from_network = "0x110-0x11F"
+record_rotate_mb = 2.5
+can_bitrate = 5e5
+peer_site_id = 9
+)"),
+                   c);
+  const auto printed = schema_for(c).print();
+  CHECK_THAT(printed, Catch::Contains("# site_id (unset)"));
+  CHECK_THAT(printed, Catch::Contains("# allow (unset)"));  // the two directions differ
+  CHECK_THAT(printed, Catch::Contains("record_rotate_mb = 2.5  # MB: "));
+  CHECK_THAT(printed, Catch::Contains("can_bitrate = 500000  # bit/s: "));
+  BridgeConfig again;
+  load_config_file(write_temp("lever-bridge-printed.toml", printed), again);
+  CHECK(schema_for(again).print() == printed);
+  CHECK(again.record_rotate_bytes == c.record_rotate_bytes);
+  CHECK(schema_for(again).value_text("key") == "/etc/lever/site.key");
+  CHECK(schema_for(again).value_text("site_id") == "");
 }
 
 TEST_CASE("config paths are relative to the configuration file", "[bridge][config]") {

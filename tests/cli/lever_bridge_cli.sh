@@ -103,36 +103,47 @@ printf '\xef\xbb\xbfcan = "vcan0"\n' >"$work/etc/bom.toml"
 run --config "$work/etc/bom.toml" --check-config
 check "a config with a UTF-8 BOM is read (exit 2 for the missing bind, got $code)" grep -q "bind (key 'bind') is required" "$work/io/err"
 
-# ---- The TOML file: each value refused at load, naming the key and the value ----
+# ---- --get: one key's effective value, what scripts read a configuration with ----
+run --config "$work/etc/rt.toml" --get key; ok "--get key"
+check "--get key: the path from the config's directory, without quotes" test "$(cat "$work/io/out")" == "$work/etc/site.key"
+run --config "$work/etc/bridge.toml" --get site_id; ok "--get an unset key"
+check "--get an unset key: an empty line" test "$(cat "$work/io/out")" == ""
+run --config "$work/etc/rt.toml" --get site_id --site-id 7; ok "--get a key the command line sets"
+check "--get: the command line wins over the file" test "$(cat "$work/io/out")" == "7"
+expect_bad "--get an unknown key" "--get: no key 'nope'; the keys: can, bind, peer" --config "$work/etc/bridge.toml" --get nope
+expect_bad "--get with --check-config" "excludes" --config "$work/etc/bridge.toml" --get peer --check-config
+expect_bad "--get on a configuration that is not valid" "--key is required" "${net[@]}" --get peer
+
+# ---- The TOML file: each value refused at load, naming the file, the key and the value or its type ----
 toml_bad() {  # toml_bad NAME MESSAGE LINE
   printf 'can = "vcan0"\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n%s\n' "$3" \
     >"$work/etc/bad.toml"
   expect_bad "TOML: $1" "$2" --config "$work/etc/bad.toml" --check-config
 }
-toml_bad "stats_interval_s NaN" "key 'stats_interval_s': must be a time in seconds from 0.01 to 3600, got nan" "stats_interval_s = nan"
-toml_bad "probe_interval_s infinite" "key 'probe_interval_s': must be a time in seconds from 0.01 to 3600, got inf" "probe_interval_s = inf"
+toml_bad "stats_interval_s NaN" "stats_interval_s: must be a number of s in [0.01, 3600], got nan" "stats_interval_s = nan"
+toml_bad "probe_interval_s infinite" "probe_interval_s: must be a number of s in [0.01, 3600], got inf" "probe_interval_s = inf"
 toml_bad "probe_interval_s 0" "got 0" "probe_interval_s = 0"
-toml_bad "record_keep_files fractional" "key 'record_keep_files': must be an integer from 1 to 1000, got 2.5" "record_keep_files = 2.5"
-toml_bad "record_keep_files NaN" "key 'record_keep_files': must be an integer from 1 to 1000, got nan" "record_keep_files = nan"
-toml_bad "can_bitrate fractional" "key 'can_bitrate': must be an integer from 10000 to 1000000, got 500000.5" "can_bitrate = 500000.5"
-toml_bad "can_bitrate NaN" "key 'can_bitrate'" "can_bitrate = nan"
-toml_bad "site_id fractional" "key 'site_id': must be an integer from 0 to 255, got 2.5" "site_id = 2.5"
+toml_bad "record_keep_files fractional" "record_keep_files: must be a whole number in [1, 1000], got 2.5" "record_keep_files = 2.5"
+toml_bad "record_keep_files NaN" "record_keep_files: must be a whole number in [1, 1000], got nan" "record_keep_files = nan"
+toml_bad "can_bitrate fractional" "can_bitrate: must be a whole number in [10000, 1000000], got 500000.5" "can_bitrate = 500000.5"
+toml_bad "can_bitrate NaN" "can_bitrate: must be a whole number in [10000, 1000000], got nan" "can_bitrate = nan"
+toml_bad "site_id fractional" "site_id: must be a whole number in [0, 255], got 2.5" "site_id = 2.5"
 toml_bad "site_id 300" "got 300" "site_id = 300"
-toml_bad "peer_site_id negative" "key 'peer_site_id': must be an integer from 0 to 255, got -1" "peer_site_id = -1"
+toml_bad "peer_site_id negative" "peer_site_id: must be a whole number in [0, 255], got -1" "peer_site_id = -1"
 toml_bad "site_id equal to peer_site_id" "site_id and peer_site_id are both 4" $'site_id = 4\npeer_site_id = 4'
-toml_bad "realtime_priority 100" "key 'realtime_priority': must be an integer from 0 to 99, got 100" "realtime_priority = 100"
-toml_bad "record_rotate_mb huge" "key 'record_rotate_mb'" "record_rotate_mb = 1e300"
+toml_bad "realtime_priority 100" "realtime_priority: must be a whole number in [0, 99], got 100" "realtime_priority = 100"
+toml_bad "record_rotate_mb huge" "record_rotate_mb: must be a number of MB in [0, 1e+06], got 1e+300" "record_rotate_mb = 1e300"
 toml_bad "record_rotate_mb NaN" "got nan" "record_rotate_mb = nan"
-toml_bad "stats_json a string" "key 'stats_json': expected true or false, got 'yes'" 'stats_json = "yes"'
-toml_bad "an unknown key" "key 'realtime': unknown key" "realtime = 1"
-toml_bad "an empty allow-list" "key 'allow': must not be empty" 'allow = ""'
+toml_bad "stats_json a string" "stats_json: must be true or false, got a string" 'stats_json = "yes"'
+toml_bad "an unknown key" "bad.toml: realtime: unknown key" "realtime = 1"
+toml_bad "an empty allow-list" "allow: must not be empty" 'allow = ""'
 toml_bad "an id beyond 11 bits" "beyond 11 bits" 'allow_to_network = "0x800"'
-toml_bad "an empty record path" "key 'record': must not be empty" 'record = ""'
+toml_bad "an empty record path" "record: must not be empty" 'record = ""'
 toml_bad "a syntax error" "bad.toml:5" "stats_json = "
 printf 'can = ""\nbind = "127.0.0.1:5000"\npeer = "127.0.0.1:5001"\nkey = "site.key"\n' >"$work/etc/bad.toml"
-expect_bad "TOML: an empty interface" "key 'can': must not be empty" --config "$work/etc/bad.toml" --check-config
+expect_bad "TOML: an empty interface" "bad.toml: can: must not be empty" --config "$work/etc/bad.toml" --check-config
 printf 'can = 5\n' >"$work/etc/bad.toml"
-expect_bad "TOML: a number for a string" "key 'can': expected a string, got 5" --config "$work/etc/bad.toml" --check-config
+expect_bad "TOML: a number for a string" "bad.toml: can: must be a string, got an integer" --config "$work/etc/bad.toml" --check-config
 printf 'peer = "127.0.0.1:0"\ncan = "vcan0"\nbind = "127.0.0.1:5000"\nkey = "site.key"\n' >"$work/etc/bad.toml"
 expect_bad "TOML: peer port 0" "peer '127.0.0.1:0': port 0" --config "$work/etc/bad.toml" --check-config
 

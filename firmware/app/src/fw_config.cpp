@@ -18,13 +18,14 @@ constexpr int kMissedPollsTolerated = 1;
 using codec::Mode;
 using fw::Tick;
 
-const ConfigSchema::Choices<Mode> kModes = [] {
-  ConfigSchema::Choices<Mode> modes;
+const program::ConfigSchema::Choices<Mode> kModes = [] {
+  program::ConfigSchema::Choices<Mode> modes;
   for (const Mode m : codec::kAllModes) modes.emplace_back(codec::name(m), m);
   return modes;
 }();
 
-void bind_codec(ConfigSchema& s, const std::string& section, codec::Config<double>& c, const std::string& unit) {
+void bind_codec(program::ConfigSchema& s, const std::string& section, codec::Config<double>& c,
+                const std::string& unit) {
   s.choice(section + ".mode", c.mode, kModes, "reference: last value sent (deadband) or the linear predictor");
   s.number(section + ".p", c.p, 0.0, 6.5535, "", "Weber fraction: a sample is sent when it differs by more than p");
   s.number(section + ".floor", c.floor, 0.0, 65.535, unit, "absolute deadband floor (0: the paper's rule)");
@@ -165,8 +166,8 @@ std::optional<RelationProblem> certain_fault_at_rest(const fw::LeverConfig& l) {
 
 }  // namespace
 
-ConfigSchema schema_for(FwConfig& config) {
-  ConfigSchema s;
+program::ConfigSchema schema_for(FwConfig& config) {
+  program::ConfigSchema s;
   auto& l = config.lever;
   s.choice("lever.role", l.role, {{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}},
            "HSI: the operator's lever; TOP: the lever at the wall");
@@ -419,8 +420,9 @@ MotorKeys motor_keys_from(const toml::table& table, const std::string& source, M
   auto schema = schema_for(config);
   auto each = schema.load_table_each(table, source);
   // The motor's problems first: they are the ones that decide.
-  std::stable_partition(each.begin(), each.end(),
-                        [&](const ConfigSchema::KeyProblem& p) { return p.key.empty() || p.key.starts_with(kMotor); });
+  std::stable_partition(each.begin(), each.end(), [&](const program::ConfigSchema::KeyProblem& p) {
+    return p.key.empty() || p.key.starts_with(kMotor);
+  });
   bool motor_readable = true;
   for (const auto& p : each) {
     if (p.key.empty() || p.key.starts_with(kMotor)) motor_readable = false;
@@ -460,7 +462,7 @@ MotorKeys motor_keys_from(const toml::table& table, const std::string& source, M
 }
 
 MotorKeys load_motor_keys(const std::string& path) {
-  const auto parsed = ConfigSchema::parse_file(path);
+  const auto parsed = program::ConfigSchema::parse_file(path);
   if (!parsed.error.empty()) return {std::nullopt, {parsed.error}};
   MotorKeys out = motor_keys_from(parsed.table, path, MotorKeysRequired::identity);
   // What one key cannot say alone, said once every key has loaded.

@@ -67,7 +67,7 @@ MotorState read_motor_state(const std::string& path) {
   MotorState out;
   if (::access(path.c_str(), F_OK) != 0 && errno == ENOENT) return out;
   out.found = true;
-  auto parsed = ConfigSchema::parse_file(path);
+  auto parsed = program::ConfigSchema::parse_file(path);
   if (!parsed.error.empty()) {
     out.problems.push_back(parsed.error);
     return out;

@@ -5,7 +5,6 @@
 #include <string>
 #include <vector>
 
-#include "lever/app/config_schema.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/platform/board_can_port_config.hpp"
 #include "lever/platform/gpio_encoder_config.hpp"
@@ -14,6 +13,7 @@
 #include "lever/platform/modbus_gauge_presets.hpp"
 #include "lever/platform/pwm_motor_config.hpp"
 #include "lever/platform/realtime_config.hpp"
+#include "lever/program/config_schema.hpp"
 
 namespace lever::app {
 
@@ -92,7 +92,7 @@ struct FwConfig {
 platform::BoardCanPortConfig can_config(const FwConfig& config);
 
 // The schema of a FwConfig: every key, bound to `config`'s fields.
-ConfigSchema schema_for(FwConfig& config);
+program::ConfigSchema schema_for(FwConfig& config);
 
 // The command line's overrides: applied over the file before anything is validated, each through the same
 // check as its key in the file, so that an override cannot pass what the file could not.

@@ -3,6 +3,7 @@
 // Serialize does): a TOML file and `--check-config` cannot drift apart. Each field knows its dotted key, its
 // unit, its range and a line of documentation; loading reports the file, the key and the problem.
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
@@ -16,16 +17,24 @@
 #endif
 #include <toml++/toml.h>
 
-namespace lever::app {
+namespace lever::program {
 
 class ConfigSchema {
  public:
   // A choice's names and values, e.g. {{"hsi", Role::hsi}, {"top", Role::top}}.
   template <typename E>
   using Choices = std::vector<std::pair<std::string, E>>;
+  // A field's load stores the value or says what is wrong with it; its print gives the value as TOML, or nothing
+  // while the value is unset (an optional one the file left out), which print() shows as a comment.
+  using Load = std::function<std::optional<std::string>(const toml::node&)>;
+  using Print = std::function<std::optional<std::string>()>;
+  // Whether a string may be "": an empty interface or address is a mistake, an empty index line means none.
+  // A text that refuses "" and holds it is unset (printed as a comment, as an unset optional is).
+  enum class Empty { allowed, refused };
 
   void number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc);
-  // Whole numbers: a TOML integer, or a float with no fractional part, in [lo, hi].
+  // Whole numbers: a TOML integer, or a float with no fractional part, in [lo, hi]. Int is any arithmetic type
+  // that holds the range (a bit rate kept in a double is still whole in the file).
   template <typename Int>
   void integer(std::string key, Int& value, std::int64_t lo, std::int64_t hi, std::string unit, std::string doc) {
     add({std::move(key), std::move(unit), std::move(doc),
@@ -37,8 +46,34 @@ class ConfigSchema {
          },
          [&value] { return std::to_string(static_cast<std::int64_t>(value)); }});
   }
+  // The same, for a value the program decides while the file leaves it out (a random id): printed as a comment
+  // while unset, and value() gives "".
+  template <typename Int>
+  void integer(std::string key, std::optional<Int>& value, std::int64_t lo, std::int64_t hi, std::string unit,
+               std::string doc) {
+    add({std::move(key), std::move(unit), std::move(doc),
+         [&value, lo, hi](const toml::node& n) -> std::optional<std::string> {
+           std::int64_t v = 0;
+           if (auto e = read_integer(n, lo, hi, v)) return e;
+           value = static_cast<Int>(v);
+           return std::nullopt;
+         },
+         [&value]() -> std::optional<std::string> {
+           if (!value) return std::nullopt;
+           return std::to_string(static_cast<std::int64_t>(*value));
+         }});
+  }
   void boolean(std::string key, bool& value, std::string doc);
-  void text(std::string key, std::string& value, std::string doc);
+  void text(std::string key, std::string& value, std::string doc, Empty empty = Empty::allowed);
+  // A string with a syntax or a meaning of its own (an id list, a path): `store(text, file)` turns it into the
+  // configuration's value, `file` being the file the string was read from (empty for a value from elsewhere, such
+  // as --set), for what is relative to it; a std::invalid_argument it throws is the key's problem. An empty string
+  // is refused before `store` sees it.
+  using Store = std::function<void(const std::string& text, const std::filesystem::path& file)>;
+  void parsed_text(std::string key, std::string doc, Store store, Print print);
+  // Anything else (a number kept in other units, one key that sets two values), loaded, refused and printed as
+  // the fields above are. The read_* functions give `load` the fields' own checks and words.
+  void custom(std::string key, std::string unit, std::string doc, Load load, Print print);
   template <typename E>
   void choice(std::string key, E& value, Choices<E> choices, std::string doc) {
     std::string names;
@@ -97,7 +132,8 @@ class ConfigSchema {
   // Returns "SOURCE: KEY: problem", or "SOURCE: 'TEXT': ..." when it is no KEY=VALUE or VALUE no TOML value.
   std::optional<std::string> load_assignment(std::string_view assignment, const std::string& source);
 
-  // One key's effective value as a TOML value ("tcp" quoted, 25, true); nothing for a key the schema lacks.
+  // One key's effective value as a TOML value ("tcp" quoted, 25, true; "" while an optional one is unset);
+  // nothing for a key the schema lacks.
   std::optional<std::string> value(std::string_view key) const;
   // The same for a shell: a string without its quotes, every other value as its TOML text.
   std::optional<std::string> value_text(std::string_view key) const;
@@ -106,17 +142,25 @@ class ConfigSchema {
   // ("board.motor."), only the keys that start with it.
   std::string print(std::string_view prefix = {}) const;
 
- private:
-  struct Field {
-    std::string key, unit, doc;
-    std::function<std::optional<std::string>(const toml::node&)> load;
-    std::function<std::string()> print;
-  };
-  void add(Field f);
-  std::string unknown_key(const toml::table& t, const std::string& key, const std::string& source) const;
+  // The fields' checks, for a custom load: each stores into `out` or returns the problem, in the fields' words.
+  static std::optional<std::string> read_number(const toml::node& n, double lo, double hi, const std::string& unit,
+                                                double& out);
   static std::optional<std::string> read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
                                                  std::int64_t& out);
   static std::optional<std::string> read_text(const toml::node& n, std::string& out);
+  // The fields' printing, for a custom print: a string quoted and escaped, a number that stays a TOML float.
+  static std::string quoted(std::string_view s);
+  static std::string number_text(double v);
+
+ private:
+  struct Field {
+    std::string key, unit, doc;
+    Load load;
+    Print print;
+  };
+  void add(Field f);
+  std::string unknown_key(const toml::table& t, const std::string& key, const std::string& source) const;
+  static std::optional<std::string> read_text_value(const toml::node& n, Empty empty, std::string& out);
   static std::string printable(std::string_view s);
   // TEXT read as one TOML value (as a file's "key = TEXT" would be); nothing when it is none.
   static std::optional<toml::table> parse_value(std::string_view text);
@@ -125,4 +169,4 @@ class ConfigSchema {
   std::map<std::string, std::size_t, std::less<>> index_;
 };
 
-}  // namespace lever::app
+}  // namespace lever::program

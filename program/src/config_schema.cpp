@@ -1,15 +1,16 @@
-#include "lever/app/config_schema.hpp"
+#include "lever/program/config_schema.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "lever/program/config_file.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/text.hpp"
 
-namespace lever::app {
+namespace lever::program {
 namespace {
 
 std::string type_name(const toml::node& n) {
@@ -29,12 +30,6 @@ std::string type_name(const toml::node& n) {
     default:
       return "a date or time";
   }
-}
-
-std::string number_text(double v) {
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // stays a TOML float
-  return s;
 }
 
 // Dotted keys of every leaf value in a table (arrays count as leaves).
@@ -101,23 +96,48 @@ std::optional<std::string> ConfigSchema::read_text(const toml::node& n, std::str
   return std::nullopt;
 }
 
+// A NUL would cut the string short wherever it becomes a C string (a path, an interface name).
+std::optional<std::string> ConfigSchema::read_text_value(const toml::node& n, Empty empty, std::string& out) {
+  std::string s;
+  if (auto e = read_text(n, s)) return e;
+  if (s.find('\0') != std::string::npos) return "must not contain a NUL byte";
+  if (empty == Empty::refused && s.empty()) return "must not be empty";
+  out = std::move(s);
+  return std::nullopt;
+}
+
+std::optional<std::string> ConfigSchema::read_number(const toml::node& n, double lo, double hi, const std::string& unit,
+                                                     double& out) {
+  double v = 0.0;
+  if (const auto* f = n.as_floating_point()) {
+    v = f->get();
+  } else if (const auto* i = n.as_integer()) {
+    v = static_cast<double>(i->get());
+  } else {
+    return "must be a number, got " + type_name(n);
+  }
+  // The same check, and the same words, as the programs' numeric options.
+  const std::string what = unit.empty() ? "a number" : "a number of " + unit;
+  if (auto e = program::check_number(v, {lo, hi, false, false, what})) return e;
+  out = v;
+  return std::nullopt;
+}
+
+std::string ConfigSchema::quoted(std::string_view s) {
+  std::ostringstream out;
+  out << toml::value<std::string>(std::string(s));
+  return out.str();
+}
+
+std::string ConfigSchema::number_text(double v) {
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // stays a TOML float
+  return s;
+}
+
 void ConfigSchema::number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc) {
   add({std::move(key), unit, std::move(doc),
-       [&value, lo, hi, unit](const toml::node& n) -> std::optional<std::string> {
-         double v = 0.0;
-         if (const auto* f = n.as_floating_point()) {
-           v = f->get();
-         } else if (const auto* i = n.as_integer()) {
-           v = static_cast<double>(i->get());
-         } else {
-           return "must be a number, got " + type_name(n);
-         }
-         // The same check, and the same words, as the programs' numeric options.
-         const std::string what = unit.empty() ? "a number" : "a number of " + unit;
-         if (auto e = program::check_number(v, {lo, hi, false, false, what})) return e;
-         value = v;
-         return std::nullopt;
-       },
+       [&value, lo, hi, unit](const toml::node& n) { return read_number(n, lo, hi, unit, value); },
        [&value] { return number_text(value); }});
 }
 
@@ -132,20 +152,35 @@ void ConfigSchema::boolean(std::string key, bool& value, std::string doc) {
        [&value] { return std::string(value ? "true" : "false"); }});
 }
 
-void ConfigSchema::text(std::string key, std::string& value, std::string doc) {
+void ConfigSchema::text(std::string key, std::string& value, std::string doc, Empty empty) {
   add({std::move(key), "", std::move(doc),
-       [&value](const toml::node& n) -> std::optional<std::string> {
+       [&value, empty](const toml::node& n) { return read_text_value(n, empty, value); },
+       // A text that refuses "" holds it only while unset: printed, it would not load back.
+       [&value, empty]() -> std::optional<std::string> {
+         if (empty == Empty::refused && value.empty()) return std::nullopt;
+         return quoted(value);
+       }});
+}
+
+void ConfigSchema::parsed_text(std::string key, std::string doc, Store store, Print print) {
+  add({std::move(key), "", std::move(doc),
+       [store = std::move(store)](const toml::node& n) -> std::optional<std::string> {
          std::string s;
-         if (auto e = read_text(n, s)) return e;
-         if (s.find('\0') != std::string::npos) return "must not contain a NUL byte";
-         value = s;
+         if (auto e = read_text_value(n, Empty::refused, s)) return e;
+         // toml++ keeps, on every node, the source name the document was parsed under: load_file's path.
+         const auto& file = n.source().path;
+         try {
+           store(s, file ? std::filesystem::path(*file) : std::filesystem::path());
+         } catch (const std::invalid_argument& e) {
+           return std::string(e.what());
+         }
          return std::nullopt;
        },
-       [&value] {
-         std::ostringstream out;
-         out << toml::value<std::string>(value);
-         return out.str();
-       }});
+       std::move(print)});
+}
+
+void ConfigSchema::custom(std::string key, std::string unit, std::string doc, Load load, Print print) {
+  add({std::move(key), std::move(unit), std::move(doc), std::move(load), std::move(print)});
 }
 
 std::optional<std::string> ConfigSchema::load_string(std::string_view text, const std::string& source_name) {
@@ -262,7 +297,7 @@ std::optional<std::string> ConfigSchema::value_text(std::string_view key) const 
 std::optional<std::string> ConfigSchema::value(std::string_view key) const {
   const auto it = index_.find(key);
   if (it == index_.end()) return std::nullopt;
-  return fields_[it->second].print();
+  return fields_[it->second].print().value_or("");
 }
 
 std::optional<std::string> ConfigSchema::load_value(const std::string& key, const toml::node& value,
@@ -285,9 +320,16 @@ std::string ConfigSchema::print(std::string_view prefix) const {
       out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", table);
       section = table;
     }
-    out += fmt::format("{} = {}  # {}{}\n", name, f.print(), f.unit.empty() ? "" : f.unit + ": ", f.doc);
+    const auto value = f.print();
+    const std::string unit = f.unit.empty() ? "" : f.unit + ": ";
+    // An unset value stays out of the document, which then reads back as the configuration it shows.
+    if (value) {
+      out += fmt::format("{} = {}  # {}{}\n", name, *value, unit, f.doc);
+    } else {
+      out += fmt::format("# {} (unset)  # {}{}\n", name, unit, f.doc);
+    }
   }
   return out;
 }
 
-}  // namespace lever::app
+}  // namespace lever::program

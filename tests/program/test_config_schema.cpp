@@ -1,0 +1,108 @@
+// ConfigSchema's fields beyond lever-fw's: optional integers, refused empty strings, text with a syntax of its
+// own, custom fields. lever-fw's own keys are held by tests/cli/lever_fw_cli.sh.
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "lever/program/config_schema.hpp"
+
+using lever::program::ConfigSchema;
+
+namespace {
+
+struct Settings {
+  std::optional<std::uint8_t> id;
+  std::string name = "a";
+  std::string list = "x";
+  std::filesystem::path file;
+  std::uint64_t bytes = 0;
+};
+
+ConfigSchema schema_for(Settings& s) {
+  ConfigSchema c;
+  c.integer("id", s.id, 0, 255, "", "an id, random while unset");
+  c.text("name", s.name, "a name", ConfigSchema::Empty::refused);
+  c.parsed_text(
+      "list", "only x or y",
+      [&s](const std::string& text, const std::filesystem::path&) {
+        if (text != "x" && text != "y") throw std::invalid_argument("'" + text + "' is neither x nor y");
+        s.list = text;
+      },
+      [&s] { return ConfigSchema::quoted(s.list); });
+  c.parsed_text(
+      "file", "relative to the configuration",
+      [&s](const std::string& text, const std::filesystem::path& from) { s.file = from.parent_path() / text; },
+      [&s]() -> std::optional<std::string> {
+        if (s.file.empty()) return std::nullopt;  // none yet: "" would not load
+        return ConfigSchema::quoted(s.file.string());
+      });
+  c.custom(
+      "size_kb", "kB", "kept in bytes",
+      [&s](const toml::node& n) -> std::optional<std::string> {
+        double kb = 0;
+        if (auto e = ConfigSchema::read_number(n, 0, 10, "kB", kb)) return e;
+        s.bytes = static_cast<std::uint64_t>(kb * 1000);
+        return std::nullopt;
+      },
+      [&s] { return ConfigSchema::number_text(static_cast<double>(s.bytes) / 1000); });
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("an optional integer: unset until loaded, printed as a comment while unset", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  CHECK(schema.value("id") == "");
+  CHECK(schema.value_text("id") == "");
+  CHECK(schema.print().find("# id (unset)  # an id, random while unset\n") != std::string::npos);
+  REQUIRE_FALSE(schema.load_string("id = 7", "f.toml"));
+  REQUIRE(s.id);
+  CHECK(*s.id == 7);
+  CHECK(schema.value("id") == "7");
+  CHECK(schema.print().find("id = 7  # an id") != std::string::npos);
+  CHECK(schema.load_string("id = 256", "f.toml") == "f.toml: id: must be a whole number in [0, 255], got 256");
+}
+
+TEST_CASE("a text that must not be empty", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  CHECK(schema.load_string("name = \"\"", "f.toml") == "f.toml: name: must not be empty");
+  CHECK(schema.load_string("name = 5", "f.toml") == "f.toml: name: must be a string, got an integer");
+  CHECK(s.name == "a");
+  s.name.clear();  // a default of none: unset, not a "" that would not load back
+  CHECK(schema.print().find("# name (unset)  # a name\n") != std::string::npos);
+  CHECK(schema.value("name") == "");
+}
+
+TEST_CASE("a parsed text: its own syntax, and paths from the file that holds them", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  REQUIRE_FALSE(schema.load_string("list = \"y\"\nfile = \"k.key\"", "/etc/lever/f.toml"));
+  CHECK(s.list == "y");
+  CHECK(s.file == "/etc/lever/k.key");
+  CHECK(schema.value_text("list") == "y");
+  CHECK(schema.load_string("list = \"z\"", "f.toml") == "f.toml: list: 'z' is neither x nor y");
+  CHECK(schema.load_string("list = \"\"", "f.toml") == "f.toml: list: must not be empty");
+  CHECK(s.list == "y");
+  // From elsewhere than a file (--set): no directory to take it from.
+  REQUIRE_FALSE(schema.load_assignment("file=\"k.key\"", "--set"));
+  CHECK(s.file == "k.key");
+}
+
+TEST_CASE("a custom field: the number checks' words, its own units, and a print that reads back", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  REQUIRE_FALSE(schema.load_string("size_kb = 2.5\nid = 3\nname = \"n\"", "f.toml"));
+  CHECK(s.bytes == 2500);
+  CHECK(schema.load_string("size_kb = nan", "f.toml") == "f.toml: size_kb: must be a number of kB in [0, 10], got nan");
+  CHECK(schema.load_string("size_kb = \"1\"", "f.toml") == "f.toml: size_kb: must be a number, got a string");
+  Settings again;
+  auto reread = schema_for(again);
+  CHECK(reread.load_string(schema.print(), "printed.toml") == std::nullopt);
+  CHECK(reread.print() == schema.print());
+  CHECK(schema.print().find("# file (unset)") != std::string::npos);
+}
