@@ -58,7 +58,14 @@ std::optional<std::string> check_whole_text(std::string_view text, std::uint64_t
 }
 
 CLI::Validator number(Bounds b) {
-  return CLI::Validator([b](std::string& text) { return check_number_text(text, b).value_or(""); }, describe(b));
+  // The check runs at parse time, after a caller's text for `what` ("a floor in " + unit) may be gone: it keeps a copy.
+  return CLI::Validator(
+      [b, what = std::string(b.what)](std::string& text) {
+        Bounds own = b;
+        own.what = what;
+        return check_number_text(text, own).value_or("");
+      },
+      describe(b));
 }
 
 CLI::Validator whole(std::uint64_t lo, std::uint64_t hi, std::string_view what) {
