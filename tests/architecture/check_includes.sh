@@ -12,6 +12,7 @@ cd "$1" || exit 2
 rules=(
   "program|program"
   "common|codec common math protocol"
+  "codec_cli|codec common math protocol program codec_cli"
   "firmware/core|codec common math protocol fw"
   "firmware/mcu|codec common math protocol fw"
   "platform|codec common math protocol fw platform"

@@ -7,7 +7,7 @@
 set -uo pipefail
 check=$1
 source "$(dirname "$0")/../cli/lib.sh"
-for room in program common firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge host/ctl host/view host/plot host/study \
+for room in program common codec_cli firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge host/ctl host/view host/plot host/study \
   hil/devices hil/include hil/src hil/app hil/fw-sim; do
   mkdir -p "$work/tree/$room"
 done
