@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "codec_run.hpp"
+#include "lever/codec_cli/codec_options.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/output_file.hpp"
@@ -18,6 +19,9 @@
 namespace {
 
 namespace program = lever::program;
+
+// One signal in whatever unit the trace is in.
+constexpr lever::codec_cli::Signal kTrace{"", "", "signal units"};
 
 int fail(int code, const std::string& message) {
   fmt::print(stderr, "lever-codec: {}\n", message);
@@ -40,7 +44,6 @@ void check_cutoff(const lever::tool::Trace& trace, double filter_hz) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  using lever::codec::Mode;
   CLI::App app{
       "Perception-based deadband codec (Hinterseer et al.) on a recorded haptic trace.\n"
       "Input CSV: header t,x (1-DoF) or t,x,y,z (3-DoF), t in seconds, strictly increasing ('-': stdin).\n"
@@ -50,19 +53,7 @@ int main(int argc, char** argv) {
 
   lever::codec::Config<double> config;
   std::string input, output;
-  const auto modes = program::choices_of(lever::codec::kAllModes, lever::codec::name);
-  app.add_option("--mode", config.mode, "deadband (zero-order hold) or predictive (linear predictor)")
-      ->transform(program::one_of(modes))
-      ->default_str(std::string(lever::codec::name(lever::codec::Mode::deadband)));
-  app.add_option("--p", config.p, "Weber fraction p: relative deadband, e.g. 0.1 for 10 %")
-      ->check(program::number(program::kWeberFraction))
-      ->default_str("0.1");
-  app.add_option("--floor", config.floor, "absolute deadband floor in signal units (0 = the paper's rule)")
-      ->check(program::number({0.0, program::kUnbounded, false, false, "a floor in signal units"}))
-      ->default_str("0");
-  app.add_option("--filter-hz", config.filter_hz,
-                 "low-pass prefilter cut-off in Hz, below the trace's Nyquist frequency (default: off)")
-      ->check(program::number({0.0, program::kUnbounded, true, false, "a cut-off in Hz"}));
+  lever::codec_cli::add_options(app, config, kTrace, lever::codec_cli::kOffline);
   app.add_option("--in", input, "input trace CSV ('-': stdin)")->check(program::path());
   app.add_option("--out", output, "output CSV, written atomically ('-': stdout)")->check(program::path());
 

@@ -17,7 +17,7 @@ rules=(
   "firmware/mcu|codec common math protocol fw"
   "platform|codec common math protocol fw platform"
   "firmware/app|codec common math protocol fw platform program app"
-  "host/codec_tool|codec common math protocol program"
+  "host/codec_tool|codec common math protocol program codec_cli"
   "host/bridge|codec common math protocol platform program"
   "host/ctl|codec common math protocol platform program"
   "host/view|codec common math protocol platform program"
