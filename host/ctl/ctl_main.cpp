@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "lever/codec_cli/codec_options.hpp"
 #include "lever/platform/interface_name.hpp"
 #include "lever/platform/socketcan.hpp"
 #include "lever/program/choices.hpp"
@@ -41,9 +42,11 @@ struct Options {
   std::optional<double> timeout_s;
   // set-deadband
   protocol::Direction direction = protocol::Direction::motion;
-  lever::codec::Mode mode = lever::codec::Mode::deadband;
-  double p = 0.0, floor = 0.0, filter_hz = 0.0;
+  lever::codec::Config<double> codec;
 };
+
+// One direction, which --direction names.
+constexpr lever::codec_cli::Signal kDirection{"", "", "rad/s or N"};
 
 int fail(int code, const std::string& message) {
   fmt::print(stderr, "lever-ctl: {}\n", message);
@@ -129,10 +132,10 @@ class Session {
     m.opcode = lever::ctl::opcode(verb);
     if (verb == Verb::set_deadband) {
       m.direction = o.direction;
-      m.mode = o.mode;
-      m.p = static_cast<std::uint16_t>(std::lround(o.p / protocol::kPLsb));
-      m.floor = static_cast<std::uint16_t>(std::lround(o.floor / protocol::kFloorLsb));
-      m.filter_hz = static_cast<std::uint16_t>(std::lround(o.filter_hz / protocol::kFilterHzLsb));
+      m.mode = o.codec.mode;
+      m.p = static_cast<std::uint16_t>(std::lround(o.codec.p / protocol::kPLsb));
+      m.floor = static_cast<std::uint16_t>(std::lround(o.codec.floor / protocol::kFloorLsb));
+      m.filter_hz = static_cast<std::uint16_t>(std::lround(o.codec.filter_hz / protocol::kFilterHzLsb));
     }
     return m;
   }
@@ -296,21 +299,12 @@ int main(int argc, char** argv) {
   }
   const program::Choices<protocol::Direction> directions{{"motion", protocol::Direction::motion},
                                                          {"force", protocol::Direction::force}};
-  const auto modes = program::choices_of(lever::codec::kAllModes, lever::codec::name);
   deadband->add_option("--direction", o.direction, "motion (HSI to TOP) or force (TOP to HSI)")
       ->required()
       ->transform(program::one_of(directions));
-  deadband->add_option("--mode", o.mode, "deadband (zero-order hold) or predictive (linear predictor)")
-      ->transform(program::one_of(modes))
-      ->default_str(std::string(lever::codec::name(lever::codec::Mode::deadband)));
-  deadband->add_option("--p", o.p, "Weber fraction p: relative deadband, e.g. 0.1 for 10 % (sent in steps of 1e-4)")
-      ->required()
-      ->check(program::number(program::kWeberFraction));
-  deadband->add_option("--floor", o.floor, "absolute deadband floor in rad/s or N, up to 65.535 (steps of 1e-3)")
-      ->check(program::number({0.0, 65.535, false, false, "a floor in signal units"}))
-      ->default_str("0");
-  deadband->add_option("--filter-hz", o.filter_hz, "prefilter cut-off in Hz, steps of 0.1 (default 0: off)")
-      ->check(program::number(program::kCutoffAt1kHz));
+  lever::codec_cli::add_options(*deadband, o.codec, kDirection, lever::codec_cli::kSentOverCan);
+  // Required, unlike in the other programs: set-deadband changes a running lever, and sends no p it was not given.
+  deadband->get_option("--p")->required()->default_str("");
   app.require_subcommand(1);
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;

@@ -19,7 +19,7 @@ rules=(
   "firmware/app|codec common math protocol fw platform program app"
   "host/codec_tool|codec common math protocol program codec_cli"
   "host/bridge|codec common math protocol platform program"
-  "host/ctl|codec common math protocol platform program"
+  "host/ctl|codec common math protocol platform program codec_cli"
   "host/view|codec common math protocol platform program"
   "host/plot|codec common math protocol program"
   "host/study|codec common math protocol platform program study"
