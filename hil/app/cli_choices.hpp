@@ -1,6 +1,5 @@
 #pragma once
 // The names lever-hil's options take, each with the value it stands for.
-#include "lever/codec/config.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/simulation.hpp"
@@ -22,6 +21,5 @@ inline const program::Choices<bool> kOnOff{{"on", true}, {"off", false}};
 inline const program::Choices<EncoderInterface> kEncoderInterfaces = program::choices_of(kAllEncoderInterfaces);
 inline const program::Choices<SweepAxis> kSweepAxes{{"p", SweepAxis::p}, {"delay", SweepAxis::delay}};
 inline const program::Choices<fw::PassivityMode> kPassivity = program::choices_of(fw::kAllPassivityModes);
-inline const program::Choices<codec::Mode> kModes = program::choices_of(codec::kAllModes, codec::name);
 
 }  // namespace lever::hil

@@ -132,8 +132,7 @@ int run_delay_sweep(const SweepOptions& o) {
         c.topology = Topology::two_sites;
         c.duration_s = o.duration_s;
         c.seed = job.seed;
-        c.velocity_codec = {codec::Mode::deadband, o.p, 0.0, 0.0};
-        c.force_codec = {codec::Mode::deadband, o.p, 0.0, 0.0};
+        c.velocity_codec = c.force_codec = o.delay_codec;
         c.network.delay_ms = job.delay_ms;
         c.network.jitter_ms = job.delay_ms / 10.0;
         c.network.loss = job.delay_ms > 0.0 ? 0.01 : 0.0;
@@ -154,7 +153,7 @@ int run_delay_sweep(const SweepOptions& o) {
     table.add_run(keys, job.seed, sweep_values(kMetrics, job.result));
     if (job.seed == static_cast<std::uint64_t>(o.seeds)) table.end_point(keys);
   }
-  write_sweep(dir, table, gnuplot_script(plots(o.p, o.seeds)));
+  write_sweep(dir, table, gnuplot_script(plots(o.delay_codec.p, o.seeds)));
 
   if (const int code = plot_sweep(dir); code != 0) return code;
   fmt::print(

@@ -14,6 +14,7 @@
 #include "cli_choices.hpp"
 #include "delay_sweep.hpp"
 #include "latency_probe.hpp"
+#include "lever/codec_cli/codec_options.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/output_file.hpp"
 #include "lever/program/parse.hpp"
@@ -29,6 +30,7 @@ namespace {
 
 using namespace lever::hil;
 namespace program = lever::program;
+namespace codec_cli = lever::codec_cli;
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
@@ -41,6 +43,22 @@ struct SweepCommand {
   CLI::Option* force_loop = nullptr;
 };
 
+// The +floor variant must differ from the plain one: a floor of 0 is refused here, unlike in run. A cut-off of 0 is
+// not: the force's is off in the filter variants (sweep.hpp says why).
+constexpr codec_cli::Limits kVariantLimits{.floor_max = codec_cli::kOnWire.floor_max, .floor_zero = false};
+
+void add_variant_options(CLI::App& cmd, SweepOptions& o) {
+  using codec_cli::Param;
+  codec_cli::add_options(cmd, o.velocity_variants, codec_cli::kVelocity, kVariantLimits, {Param::floor},
+                         "of the +floor variant");
+  codec_cli::add_options(cmd, o.force_variants, codec_cli::kForce, kVariantLimits, {Param::floor},
+                         "of the +floor variant");
+  codec_cli::add_options(cmd, o.velocity_variants, codec_cli::kVelocity, kVariantLimits, {Param::filter_hz},
+                         "of the filter variants (30: beyond the 20-30 Hz of kinesthetic motion sensing)");
+  codec_cli::add_options(cmd, o.force_variants, codec_cli::kForce, kVariantLimits, {Param::filter_hz},
+                         "of the filter variants (off: force is felt up to about 1 kHz, beyond the loop's Nyquist)");
+}
+
 SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
   SweepCommand cmd;
   cmd.app = app.add_subcommand(
@@ -52,9 +70,9 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
                    ->delimiter(',')
                    ->check(program::number({0.0, 1000.0, false, false, "a delay in ms"}))
                    ->default_str("0,10,25,50,100");
-  cmd.p = cmd.app->add_option("--p", o.p, "with --over delay: deadband p for both directions")
-              ->check(program::number(program::kWeberFraction))
-              ->default_str("0.1");
+  codec_cli::add_options(*cmd.app, o.delay_codec, codec_cli::kBothDirections, codec_cli::kOnWire, {codec_cli::Param::p},
+                         "with --over delay");
+  cmd.p = cmd.app->get_option("--p");
   cmd.app->add_option("--scenario", o.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
       ->default_str(std::string(name(ScenarioKind::wall_tap)));
@@ -64,25 +82,7 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
       ->check(program::number({0.1, 3600.0, false, false, "a duration in seconds"}))
       ->default_str("20");
   cmd.app->add_option("--jobs", o.jobs, "parallel runs")->check(program::whole(1, 64))->default_str("2");
-  // The +floor and +filter variants must differ from the ones without: 0 is refused here, unlike in run.
-  cmd.app->add_option("--floor-velocity", o.floor_velocity, "velocity floor of the +floor variant, rad/s")
-      ->check(program::number({0.0, 65.535, true, false, "a floor in rad/s"}))
-      ->default_str("0.02");
-  cmd.app->add_option("--floor-force", o.floor_force, "force floor of the +floor variant, N")
-      ->check(program::number({0.0, 65.535, true, false, "a floor in N"}))
-      ->default_str("0.05");
-  cmd.app
-      ->add_option("--filter-hz-velocity", o.filter_hz_velocity,
-                   "velocity prefilter cut-off of the filter variants, Hz (0: off); 30: beyond the 20-30 Hz of "
-                   "kinesthetic motion sensing")
-      ->check(program::number(program::kCutoffAt1kHz))
-      ->default_str("30");
-  cmd.app
-      ->add_option("--filter-hz-force", o.filter_hz_force,
-                   "force prefilter cut-off of the filter variants, Hz (0: off); off: force is felt up to about "
-                   "1 kHz, beyond the loop's Nyquist")
-      ->check(program::number(program::kCutoffAt1kHz))
-      ->default_str("0");
+  add_variant_options(*cmd.app, o);
   cmd.topology = cmd.app
                      ->add_option("--topology", o.topology,
                                   "lever sweeps over p: one-controller (the paper's PC), one-site or two-sites")

@@ -14,14 +14,12 @@
 namespace lever::hil {
 namespace {
 
-// Ranges of the options, in their own units. Floors: the largest the CAN protocol carries (kFloorLsb x 65535).
+// Ranges of the options, in their own units.
 constexpr program::Bounds kRunSeconds{0.01, 86400.0, false, false, "a duration in seconds"};
 constexpr program::Bounds kReserveJoules{0.0, 1000.0, false, true, "an energy in J"};
 constexpr program::Bounds kSpendSeconds{0.0, 10.0, false, false, "a time in s"};
 constexpr program::Bounds kDriftGain{0.0, 999.0, false, false, "a rate in 1/s"};
 constexpr program::Bounds kShare{0.0, 1.0, false, false, "a share"};
-constexpr program::Bounds kFloorVelocity{0.0, 65.535, false, false, "a floor in rad/s"};
-constexpr program::Bounds kFloorForce{0.0, 65.535, false, false, "a floor in N"};
 // A one-way delay or jitter longer than a minute is no network the testbed's watchdogs would tolerate.
 constexpr program::Bounds kNetworkMs{0.0, 60000.0, false, false, "a time in ms"};
 
@@ -60,41 +58,19 @@ void add_scenario_options(CLI::App& cmd, RunOptions& o) {
       ->default_str("1");
 }
 
-// Each direction's deadband codec.
+// Each direction's deadband codec, both at once or one by one; and what the HSI sends it.
 void add_codec_options(CLI::App& cmd, RunOptions& o) {
-  cmd.add_option("--mode", o.mode, "deadband or predictive, both directions")
-      ->transform(program::one_of(kModes))
-      ->default_str(std::string(codec::name(codec::Mode::deadband)));
-  cmd.add_option("--mode-velocity", o.mode_velocity, "mode for HSI->TOP velocity (overrides --mode)")
-      ->transform(program::one_of(kModes));
-  cmd.add_option("--mode-force", o.mode_force, "mode for TOP->HSI force (overrides --mode)")
-      ->transform(program::one_of(kModes));
-  cmd.add_option("--p", o.p, "deadband p for both directions (0.1 = 10 %)")
-      ->check(program::number(program::kWeberFraction))
-      ->default_str("0.1");
-  cmd.add_option("--p-velocity", o.p_velocity, "p for HSI->TOP velocity (overrides --p)")
-      ->check(program::number(program::kWeberFraction));
-  cmd.add_option("--p-force", o.p_force, "p for TOP->HSI force (overrides --p)")
-      ->check(program::number(program::kWeberFraction));
+  // Both directions' floors differ by unit: there is no --floor, only --floor-velocity and --floor-force.
+  codec_cli::add_options(cmd, o.codec, codec_cli::kBothDirections, codec_cli::kOnWire,
+                         codec_cli::kAll.without(codec_cli::Param::floor));
+  codec_cli::add_overrides(cmd, o.velocity_codec, o.codec, codec_cli::kVelocity, codec_cli::kOnWire);
+  codec_cli::add_overrides(cmd, o.force_codec, o.codec, codec_cli::kForce, codec_cli::kOnWire);
   cmd.add_option("--motion-velocity", o.config.hsi_firmware.motion_velocity,
                  "what the HSI sends: difference (the quantized position's backward difference over one tick, the "
                  "paper's), adaptive-window (the same over the longest window up to 20 ms that fits the counts "
                  "within one) or estimate (its smooth velocity estimate)")
       ->transform(program::one_of(kMotionVelocities))
       ->default_str("difference");
-  cmd.add_option("--floor-velocity", o.floor_velocity, "velocity deadband floor, rad/s (0: the paper's rule)")
-      ->check(program::number(kFloorVelocity))
-      ->default_str("0");
-  cmd.add_option("--floor-force", o.floor_force, "force deadband floor, N (0: the paper's rule)")
-      ->check(program::number(kFloorForce))
-      ->default_str("0");
-  cmd.add_option("--filter-hz", o.filter_hz, "prefilter cut-off for both directions (0: off)")
-      ->check(program::number(program::kCutoffAt1kHz))
-      ->default_str("0");
-  cmd.add_option("--filter-hz-velocity", o.filter_hz_velocity, "prefilter cut-off for velocity (overrides --filter-hz)")
-      ->check(program::number(program::kCutoffAt1kHz));
-  cmd.add_option("--filter-hz-force", o.filter_hz_force, "prefilter cut-off for force (overrides --filter-hz)")
-      ->check(program::number(program::kCutoffAt1kHz));
 }
 
 // The transport between the levers and the firmware's watchdog and rest repeat.
@@ -311,10 +287,8 @@ std::string misplaced_options(const RunOptions& o) {
 
 SimConfig run_config(const RunOptions& o) {
   SimConfig c = o.config;
-  c.velocity_codec = {o.mode_velocity.value_or(o.mode), o.p_velocity.value_or(o.p), o.floor_velocity,
-                      o.filter_hz_velocity.value_or(o.filter_hz)};
-  c.force_codec = {o.mode_force.value_or(o.mode), o.p_force.value_or(o.p), o.floor_force,
-                   o.filter_hz_force.value_or(o.filter_hz)};
+  c.velocity_codec = codec_cli::resolve(o.codec, o.velocity_codec);
+  c.force_codec = codec_cli::resolve(o.codec, o.force_codec);
   if (const auto m = misplaced_options(o); !m.empty()) throw std::invalid_argument(m);
   set_hsi_force_loop(c, o.hsi_force_loop.value_or(false));
   c.hsi_firmware.counts_per_rev = c.top_firmware.counts_per_rev =

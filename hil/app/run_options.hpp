@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lever/codec/config.hpp"
+#include "lever/codec_cli/codec_options.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
@@ -15,11 +16,8 @@ namespace lever::hil {
 
 struct RunOptions {
   SimConfig config;
-  codec::Mode mode = codec::Mode::deadband;
-  std::optional<codec::Mode> mode_velocity, mode_force;
-  double p = 0.1;
-  std::optional<double> p_velocity, p_force;
-  double floor_velocity = 0.0, floor_force = 0.0, filter_hz = 0.0;
+  codec::Config<double> codec;                       // --mode, --p, --filter-hz: both directions
+  codec_cli::Overrides velocity_codec, force_codec;  // --*-velocity, --*-force: one direction each
   double comms_timeout_ms = static_cast<double>(fw::LeverConfig{}.comms_timeout);
   // Lever-only and sphere-only options, empty unless given: the other kind of scenario refuses them.
   std::optional<double> encoder_counts;
@@ -38,7 +36,6 @@ struct RunOptions {
   double passivity_reserve_share = fw::PassivityConfig{}.reserve_share;
   double passivity_display_spend_s = fw::PassivityConfig{}.display_spend_time_s;
   double passivity_drift_gain = fw::PassivityConfig{}.drift_gain_per_s;
-  std::optional<double> filter_hz_velocity, filter_hz_force;
   std::vector<std::string> faults;
   bool json = false;
   std::string trace;

@@ -145,10 +145,10 @@ int run_sweep(const SweepOptions& o) {
         c.duration_s = o.duration_s;
         c.seed = job.seed;
         const bool filter = job.variant->filter;
-        c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_velocity : 0.0,
-                            filter ? o.filter_hz_velocity : 0.0};
-        c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.floor_force : 0.0,
-                         filter ? o.filter_hz_force : 0.0};
+        c.velocity_codec = {job.variant->mode, job.p, job.variant->floor ? o.velocity_variants.floor : 0.0,
+                            filter ? o.velocity_variants.filter_hz : 0.0};
+        c.force_codec = {job.variant->mode, job.p, job.variant->floor ? o.force_variants.floor : 0.0,
+                         filter ? o.force_variants.filter_hz : 0.0};
         c.topology = o.topology;
         c.gauge_chain = o.gauge_chain;
         set_hsi_force_loop(c, o.hsi_force_loop);

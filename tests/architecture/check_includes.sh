@@ -26,7 +26,7 @@ rules=(
   "hil/devices|codec common math protocol fw platform hil/devices"
   "hil/include|codec common math protocol fw hil"
   "hil/src|codec common math protocol fw hil"
-  "hil/app|codec common math protocol fw platform program app hil hil/devices study"
+  "hil/app|codec common math protocol fw platform program codec_cli app hil hil/devices study"
   "hil/fw-sim|codec common math protocol fw program app hil"
 )
 

@@ -106,6 +106,8 @@ num "sweep --floor-velocity 0 (the +floor curve would not change)" "--floor-velo
 num "sweep --filter-hz-velocity 500 (Nyquist)" "--filter-hz-velocity must be a cut-off in Hz below Nyquist" \
   "$hil" sweep --out "$work/sw" --filter-hz-velocity 500
 num "sweep --filter-hz-force nan" "--filter-hz-force must be" "$hil" sweep --out "$work/sw" --filter-hz-force nan
+num "sweep --over delay --p 1 (as run refuses)" "--p must be a fraction in [0, 1), got 1" \
+  "$hil" sweep --out "$work/sw" --over delay --p 1
 num "run --gauge-noise-n nan" "--gauge-noise-n must be a noise in N rms in [0, 1], got 'nan'" "$hil" run --gauge-noise-n nan
 num "run --passivity-display-spend-s -1" "--passivity-display-spend-s must be a time in s in [0, 10], got -1" \
   "$hil" run --passivity-display-spend-s -1
