@@ -41,13 +41,13 @@
 
 #include "datagram.hpp"
 #include "key.hpp"
-#include "lever/platform/udp_socket.hpp"
+#include "lever/board/udp_socket.hpp"
 #include "replay_window.hpp"
 
 namespace {
 
 namespace lb = lever::bridge;
-namespace lio = lever::platform;
+namespace lio = lever::board;
 using Clock = std::chrono::steady_clock;
 using Json = nlohmann::ordered_json;  // keys in the order written: context first, as a reader wants
 

@@ -27,19 +27,19 @@
 #include <vector>
 
 #include "bench_pair.hpp"
-#include "lever/platform/latency_histogram.hpp"
-#include "lever/platform/realtime_loop.hpp"
+#include "lever/board/latency_histogram.hpp"
+#include "lever/board/realtime_loop.hpp"
 
 extern char** environ;
 
 namespace {
 
 using namespace lever;
-using platform::LatencyHistogram;
+using board::LatencyHistogram;
 
 // The board's HAL has a step clock; with it the core measures its own step times.
 struct ClockedHal : bench::BenchHal {
-  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::monotonic_ns()); }
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(board::monotonic_ns()); }
 };
 
 using Json = nlohmann::ordered_json;
@@ -157,13 +157,13 @@ struct RunnerTotals {
 };
 
 // One round of the loop, `periods` long, serving a fresh pair (it arms at tick 80: ticks start again at 1).
-std::optional<std::string> run_loop_round(const platform::RealtimeConfig& config, std::uint64_t periods, bool with_pair,
+std::optional<std::string> run_loop_round(const board::RealtimeConfig& config, std::uint64_t periods, bool with_pair,
                                           RunnerTotals& totals) {
   // Everything the step touches exists before the loop starts (and is locked with it).
   const auto pair = std::make_unique<bench::BenchPair<ClockedHal>>();
-  auto opened = platform::RealtimeLoop::open(config);
+  auto opened = board::RealtimeLoop::open(config);
   if (!opened) return opened.error().message;
-  platform::RealtimeLoop& loop = opened.value();
+  board::RealtimeLoop& loop = opened.value();
   std::stop_source stop;
   std::uint64_t trivial_sum = 0;
   loop.run(
@@ -247,12 +247,12 @@ int main(int argc, char** argv) {
                "let cyclictest hold /dev/cpu_dma_latency at 0, as it does by default");
   CLI11_PARSE(app, argc, argv);
 
-  platform::RealtimeConfig config;
+  board::RealtimeConfig config;
   config.period = std::chrono::microseconds(period_us);
   config.fifo_priority = priority;
   config.lock_memory = !no_lock;
   if (!cpus_text.empty()) {
-    const auto cpus = platform::parse_cpu_list(cpus_text);
+    const auto cpus = board::parse_cpu_list(cpus_text);
     if (!cpus) {
       std::fprintf(stderr, "lever-bench-loop: --cpus \"%s\" is no CPU list\n", cpus_text.c_str());
       return 2;

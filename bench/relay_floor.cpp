@@ -35,7 +35,7 @@
 
 #include "datagram.hpp"
 #include "key.hpp"
-#include "lever/platform/udp_socket.hpp"
+#include "lever/board/udp_socket.hpp"
 #include "lever/program/parse.hpp"
 
 namespace {
@@ -91,7 +91,7 @@ int open_can(const std::string& interface, bool write_only, std::string& error) 
   return fd;
 }
 
-int open_udp(const lever::platform::SocketAddress& local, std::string& error) {
+int open_udp(const lever::board::SocketAddress& local, std::string& error) {
   const int fd = ::socket(local.get()->sa_family, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) {
     error = fmt::format("UDP socket: {}", std::strerror(errno));
@@ -139,8 +139,7 @@ void send_all(int fd, std::span<mmsghdr> messages, Counts& counts) {
 
 // ---- can-to-udp ----
 
-int can_to_udp(int can_fd, int udp_fd, const lever::platform::SocketAddress& peer, const lb::MacKey* key,
-               Counts& counts) {
+int can_to_udp(int can_fd, int udp_fd, const lever::board::SocketAddress& peer, const lb::MacKey* key, Counts& counts) {
   std::array<can_frame, kBatch> raw{};
   std::array<iovec, kBatch> iov{};
   std::array<mmsghdr, kBatch> in{}, out{};
@@ -294,7 +293,7 @@ int main(int argc, char** argv) {
   if (const auto stop = lever::program::parse(app, argc, argv)) return *stop;
 
   std::string error;
-  const auto parsed = lever::platform::parse_socket_address(address, error);
+  const auto parsed = lever::board::parse_socket_address(address, error);
   if (!parsed) return fail(kBadInput, fmt::format("{}: {}", sender->parsed() ? "--peer" : "--bind", error));
   std::optional<lb::MacKey> key;
   if (hmac) {
@@ -307,7 +306,7 @@ int main(int argc, char** argv) {
   const bool sending = sender->parsed();
   const int can_fd = open_can(can, !sending, error);
   if (can_fd < 0) return fail(kRuntimeFailure, error);
-  lever::platform::SocketAddress any{};
+  lever::board::SocketAddress any{};
   any.storage.ss_family = parsed->storage.ss_family;
   const int udp_fd = open_udp(sending ? any : *parsed, error);
   if (udp_fd < 0) return fail(kRuntimeFailure, error);

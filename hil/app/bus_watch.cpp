@@ -4,12 +4,12 @@
 
 namespace lever::hil {
 
-platform::Result<BusWatch> BusWatch::open(const std::string& hsi_interface, const std::string& top_interface,
-                                          std::uint8_t pair) {
-  std::vector<platform::SocketCan> sockets;
+board::Result<BusWatch> BusWatch::open(const std::string& hsi_interface, const std::string& top_interface,
+                                       std::uint8_t pair) {
+  std::vector<board::SocketCan> sockets;
   const bool one_site = hsi_interface == top_interface;
   for (const auto& name : one_site ? std::vector{hsi_interface} : std::vector{hsi_interface, top_interface}) {
-    auto s = platform::SocketCan::open({name, {}, 0, false});
+    auto s = board::SocketCan::open({name, {}, 0, false});
     if (!s) return s.error();
     sockets.push_back(std::move(s).value());
   }
@@ -20,7 +20,7 @@ void BusWatch::poll(std::int64_t now_ms) {
   for (std::size_t i = 0; i < sockets_.size(); ++i) {
     protocol::CanFrame f;
     std::int64_t stamp = 0;
-    for (int n = 0; n < 1000 && sockets_[i].read(f, stamp) == platform::IoStatus::ok; ++n)
+    for (int n = 0; n < 1000 && sockets_[i].read(f, stamp) == board::IoStatus::ok; ++n)
       take(f, i == 0, one_site_ || i == 1, now_ms);
   }
 }

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "lever/platform/result.hpp"
-#include "lever/platform/socketcan.hpp"
+#include "lever/board/result.hpp"
+#include "lever/board/socketcan.hpp"
 #include "lever/protocol/messages.hpp"
 
 namespace lever::hil {
@@ -23,8 +23,8 @@ struct WatchedLever {
 class BusWatch {
  public:
   // The HSI's and the TOP's interfaces (the same one when both levers are at one site), and their pair.
-  static platform::Result<BusWatch> open(const std::string& hsi_interface, const std::string& top_interface,
-                                         std::uint8_t pair);
+  static board::Result<BusWatch> open(const std::string& hsi_interface, const std::string& top_interface,
+                                      std::uint8_t pair);
 
   // Reads every frame that has arrived; `now_ms` stamps the heartbeats.
   void poll(std::int64_t now_ms);
@@ -46,11 +46,11 @@ class BusWatch {
   std::uint64_t frames_read() const { return frames_read_; }
 
  private:
-  BusWatch(std::vector<platform::SocketCan> sockets, bool one_site, std::uint8_t pair)
+  BusWatch(std::vector<board::SocketCan> sockets, bool one_site, std::uint8_t pair)
       : sockets_(std::move(sockets)), one_site_(one_site), pair_(pair) {}
   void take(const protocol::CanFrame& f, bool hsi_site, bool top_site, std::int64_t now_ms);
 
-  std::vector<platform::SocketCan> sockets_;  // [0] the HSI's site, [1] the TOP's unless one_site_
+  std::vector<board::SocketCan> sockets_;  // [0] the HSI's site, [1] the TOP's unless one_site_
   bool one_site_;
   std::uint8_t pair_;
   std::array<WatchedLever, 2> levers_{};

@@ -15,9 +15,9 @@ namespace lever::hil {
 struct LeverDevices {
   std::optional<devices::EncoderLines> encoder;
   std::optional<devices::MotorReadback> motor;
-  std::optional<devices::GaugeServer> gauge;  // only a lever that reads its gauge has one (while it is up)
-  std::optional<platform::ModbusGaugeConfig> gauge_config;  // where it serves, to start it again
-  std::uint64_t stopped_gauges_requests = 0;                // requests the gauges stopped since had served
+  std::optional<devices::GaugeServer> gauge;             // only a lever that reads its gauge has one (while it is up)
+  std::optional<board::ModbusGaugeConfig> gauge_config;  // where it serves, to start it again
+  std::uint64_t stopped_gauges_requests = 0;             // requests the gauges stopped since had served
   double counts_per_radian = 0.0;
   std::int64_t count_origin = 0;  // the count at power-up: an incremental encoder's count starts anywhere
 

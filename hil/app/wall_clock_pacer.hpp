@@ -12,7 +12,7 @@ class WallClockPacer {
   using Clock = std::chrono::steady_clock;
   static constexpr std::int64_t kMaxCatchUpMs = 50;
 
-  // Ticks on whole milliseconds of the clock, where lever-fw's loops have theirs (platform's RealtimeLoop): the
+  // Ticks on whole milliseconds of the clock, where lever-fw's loops have theirs (the board layer's RealtimeLoop): the
   // world and the levers keep one phase however they were started.
   WallClockPacer() : start_(Clock::now()), grid_start_(whole_ms(start_)) {}
 

@@ -10,8 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
-#include "lever/platform/interface_name.hpp"
-#include "lever/platform/udp_socket.hpp"
+#include "lever/board/interface_name.hpp"
+#include "lever/board/udp_socket.hpp"
 #include "lever/program/config_file.hpp"
 #include "lever/program/config_schema.hpp"
 #include "shown_value.hpp"
@@ -113,7 +113,7 @@ void load_config_file(const std::filesystem::path& file, BridgeConfig& config) {
 
 namespace {
 
-bool is_unspecified(const platform::SocketAddress& a) {
+bool is_unspecified(const board::SocketAddress& a) {
   if (a.family() == AF_INET) {
     return reinterpret_cast<const sockaddr_in*>(&a.storage)->sin_addr.s_addr == htonl(INADDR_ANY);
   }
@@ -121,7 +121,7 @@ bool is_unspecified(const platform::SocketAddress& a) {
   return IN6_IS_ADDR_UNSPECIFIED(&v6);
 }
 
-bool is_loopback(const platform::SocketAddress& a) {
+bool is_loopback(const board::SocketAddress& a) {
   if (a.family() == AF_INET) {
     return (ntohl(reinterpret_cast<const sockaddr_in*>(&a.storage)->sin_addr.s_addr) >> 24) == 127;
   }
@@ -130,7 +130,7 @@ bool is_loopback(const platform::SocketAddress& a) {
 }
 
 // Why `a` cannot be one unicast peer, or nullptr.
-const char* not_unicast(const platform::SocketAddress& a) {
+const char* not_unicast(const board::SocketAddress& a) {
   if (a.family() == AF_INET) {
     const std::uint32_t ip = ntohl(reinterpret_cast<const sockaddr_in*>(&a.storage)->sin_addr.s_addr);
     if (ip == INADDR_BROADCAST) return "a broadcast address";
@@ -144,7 +144,7 @@ const char* not_unicast(const platform::SocketAddress& a) {
   return nullptr;
 }
 
-std::uint16_t port_of(const platform::SocketAddress& a) {
+std::uint16_t port_of(const board::SocketAddress& a) {
   return ntohs(a.family() == AF_INET ? reinterpret_cast<const sockaddr_in*>(&a.storage)->sin_port
                                      : reinterpret_cast<const sockaddr_in6*>(&a.storage)->sin6_port);
 }
@@ -185,12 +185,12 @@ void validate(const BridgeConfig& c) {
   for (const auto& [value, name] : {std::pair{&c.can_interface, "can"}, {&c.bind, "bind"}, {&c.peer, "peer"}}) {
     if (value->empty()) throw fail(fmt::format("--{0} (key '{0}') is required (see --help)", name));
   }
-  if (const auto problem = platform::interface_name_problem(c.can_interface))
+  if (const auto problem = board::interface_name_problem(c.can_interface))
     throw fail(fmt::format("can '{}': not an interface name: {}", cut(c.can_interface), *problem));
   std::string error;
-  const auto bind = platform::parse_socket_address(c.bind, error);
+  const auto bind = board::parse_socket_address(c.bind, error);
   if (!bind) throw fail("bind " + cut(error, 200));
-  const auto peer = platform::parse_socket_address(c.peer, error);
+  const auto peer = board::parse_socket_address(c.peer, error);
   if (!peer) throw fail("peer " + cut(error, 200));
   if (port_of(*bind) == 0) {
     throw fail(fmt::format("bind '{}': port 0 would be a random port, which the peer cannot know", cut(c.bind)));

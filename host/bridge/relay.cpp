@@ -97,16 +97,16 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
   // and the peer's replay window accepts it (docs/datagram-format.md).
   next_sequence_.store(static_cast<std::uint64_t>(wall_us()));
 
-  const auto local = platform::parse_socket_address(config.bind, error);
+  const auto local = board::parse_socket_address(config.bind, error);
   if (!local) return false;
-  const auto peer = platform::parse_socket_address(config.peer, error);
+  const auto peer = board::parse_socket_address(config.peer, error);
   if (!peer) return false;
   if (local->family() != peer->family()) {
     error = fmt::format("--bind {} and --peer {} are of different address families", config.bind, config.peer);
     return false;
   }
   peer_ = *peer;
-  auto udp = platform::UdpSocket::open(*local);
+  auto udp = board::UdpSocket::open(*local);
   if (!udp) {
     error = udp.error().message;
     return false;
@@ -118,10 +118,10 @@ bool Relay::start(const BridgeConfig& config, const Key& key, std::string& error
     error = fmt::format("UDP socket: fcntl: {}", std::strerror(errno));
     return false;
   }
-  platform::SocketCanConfig can_config;
+  board::SocketCanConfig can_config;
   can_config.interface = config.can_interface;
   can_config.blocking = true;  // the CAN thread sleeps in recvmmsg; writes say MSG_DONTWAIT
-  auto can = platform::SocketCan::open(can_config);
+  auto can = board::SocketCan::open(can_config);
   if (!can) {
     error = can.error().message + can_open_hint(can.error().errno_value, config.can_interface);
     return false;
@@ -354,7 +354,7 @@ void Relay::network_to_can() {
     in[i].msg_hdr.msg_name = &from[i];
   }
   Datagram d;
-  platform::SocketAddress source;
+  board::SocketAddress source;
 
   while (!stop_.load(std::memory_order_relaxed)) {
     for (auto& m : in) m.msg_hdr.msg_namelen = sizeof(sockaddr_storage);
@@ -526,7 +526,7 @@ void Relay::write_collected() {
 
 void Relay::check_can() {
   const std::uint64_t reopens = can_->reopens();
-  if (can_->recover() != platform::LinkState::up) return;
+  if (can_->recover() != board::LinkState::up) return;
   can_down_.store(false, std::memory_order_release);
   wake_.fetch_add(1, std::memory_order_release);
   wake_.notify_all();

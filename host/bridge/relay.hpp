@@ -35,9 +35,9 @@
 #include "bridge_stats.hpp"
 #include "candump_recorder.hpp"
 #include "datagram.hpp"
-#include "lever/platform/socketcan.hpp"
-#include "lever/platform/udp_socket.hpp"
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/socketcan.hpp"
+#include "lever/board/udp_socket.hpp"
+#include "lever/board/unique_fd.hpp"
 #include "peer_session.hpp"
 
 namespace lever::bridge {
@@ -84,11 +84,11 @@ class Relay {
   std::optional<MacKey> mac_key_;
   std::uint8_t site_id_ = 0;
   std::string record_network_name_;
-  std::optional<platform::SocketCan> can_;  // opened by start(); the housekeeping thread's (recover)
-  std::optional<platform::UdpSocket> udp_;  // opened by start()
-  int can_fd_ = -1, udp_fd_ = -1;           // what the relay threads use; the same numbers across a CAN reopen
-  platform::SocketAddress peer_;
-  platform::UniqueFd signal_fd_, timer_fd_;
+  std::optional<board::SocketCan> can_;  // opened by start(); the housekeeping thread's (recover)
+  std::optional<board::UdpSocket> udp_;  // opened by start()
+  int can_fd_ = -1, udp_fd_ = -1;        // what the relay threads use; the same numbers across a CAN reopen
+  board::SocketAddress peer_;
+  board::UniqueFd signal_fd_, timer_fd_;
   std::unique_ptr<CandumpRecorder> recorder_;
 
   // Shared by all threads.

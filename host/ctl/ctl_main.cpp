@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "lever/board/interface_name.hpp"
+#include "lever/board/socketcan.hpp"
 #include "lever/codec_cli/codec_options.hpp"
-#include "lever/platform/interface_name.hpp"
-#include "lever/platform/socketcan.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
@@ -74,7 +74,7 @@ struct Lever {
 
 class Session {
  public:
-  Session(Verb verb, const Options& o, lever::platform::SocketCan can)
+  Session(Verb verb, const Options& o, lever::board::SocketCan can)
       : verb_(verb), options_(o), can_(std::move(can)), command_(command(verb, o)) {
     const auto t = lever::ctl::targets(verb, o.direction);
     levers_[0].target = t.hsi;
@@ -190,14 +190,14 @@ class Session {
     m.to_hsi = to_hsi;
     m.to_top = to_top;
     switch (can_.write(protocol::pack(m, static_cast<std::uint8_t>(options_.pair)))) {
-      case lever::platform::IoStatus::ok:
+      case lever::board::IoStatus::ok:
         ++sent_;
         return 0;
-      case lever::platform::IoStatus::would_block:  // the interface's queue is full: the next copy tries again
+      case lever::board::IoStatus::would_block:  // the interface's queue is full: the next copy tries again
         return 0;
-      case lever::platform::IoStatus::interface_down:
+      case lever::board::IoStatus::interface_down:
         return fail(1, fmt::format("{} is down", can_.interface()));
-      case lever::platform::IoStatus::interface_gone:
+      case lever::board::IoStatus::interface_gone:
         return fail(1, fmt::format("{} is gone", can_.interface()));
       default:
         return fail(1, fmt::format("sending on {}: {}", can_.interface(), std::strerror(can_.last_errno())));
@@ -209,19 +209,19 @@ class Session {
     std::int64_t timestamp_us = 0;
     while (true) {
       switch (can_.read(frame, timestamp_us)) {
-        case lever::platform::IoStatus::ok:
+        case lever::board::IoStatus::ok:
           take(frame);
           continue;
-        case lever::platform::IoStatus::would_block:
+        case lever::board::IoStatus::would_block:
           return 0;
-        case lever::platform::IoStatus::skipped:
-        case lever::platform::IoStatus::error_frame:
+        case lever::board::IoStatus::skipped:
+        case lever::board::IoStatus::error_frame:
           continue;
-        case lever::platform::IoStatus::interface_down:
+        case lever::board::IoStatus::interface_down:
           return fail(1, fmt::format("{} is down", can_.interface()));
-        case lever::platform::IoStatus::interface_gone:
+        case lever::board::IoStatus::interface_gone:
           return fail(1, fmt::format("{} is gone", can_.interface()));
-        case lever::platform::IoStatus::error:
+        case lever::board::IoStatus::error:
           return fail(1, fmt::format("reading {}: {}", can_.interface(), std::strerror(can_.last_errno())));
       }
     }
@@ -246,7 +246,7 @@ class Session {
 
   Verb verb_;
   Options options_;
-  lever::platform::SocketCan can_;
+  lever::board::SocketCan can_;
   protocol::CommandMessage command_;
   Lever levers_[2] = {{"HSI", protocol::Role::hsi, false, std::nullopt, {}, std::nullopt, std::nullopt},
                       {"TOP", protocol::Role::top, false, std::nullopt, {}, std::nullopt, std::nullopt}};
@@ -311,17 +311,17 @@ int main(int argc, char** argv) {
   Verb verb = Verb::arm;
   for (const auto& [sub, v] : subs)
     if (sub->parsed()) verb = v;
-  if (const auto problem = lever::platform::interface_name_problem(o.can))
+  if (const auto problem = lever::board::interface_name_problem(o.can))
     return fail(2, fmt::format("--can '{}': {}", program::printable(o.can), *problem));
 
-  lever::platform::SocketCanConfig config;
+  lever::board::SocketCanConfig config;
   config.interface = o.can;
   config.timestamps = false;
   for (const auto role : {protocol::Role::hsi, protocol::Role::top}) {
     config.filters.push_back({protocol::heartbeat_id(static_cast<std::uint8_t>(o.pair), role), 0x7FF});
     config.filters.push_back({protocol::settings_id(static_cast<std::uint8_t>(o.pair), role), 0x7FF});
   }
-  auto can = lever::platform::SocketCan::open(config);
+  auto can = lever::board::SocketCan::open(config);
   if (!can) return fail(can.error().errno_value == ENODEV ? 2 : 1, can.error().message);
   return Session(verb, o, std::move(can).value()).run();
 }

@@ -14,7 +14,7 @@
 #include <optional>
 #include <string>
 
-#include "lever/platform/socketcan.hpp"
+#include "lever/board/socketcan.hpp"
 #include "lever/study/answer_lines.hpp"
 #include "lever/study/pair_watch.hpp"
 
@@ -51,7 +51,7 @@ struct Stop {
 // the runner waits for an answer.
 class SessionIo {
  public:
-  SessionIo(platform::SocketCan can, std::uint8_t pair, std::FILE* progress)
+  SessionIo(board::SocketCan can, std::uint8_t pair, std::FILE* progress)
       : can_(std::move(can)), watch_(pair), pair_(pair), progress_(progress) {}
 
   PairWatch& watch() { return watch_; }
@@ -95,15 +95,15 @@ class SessionIo {
   std::optional<Stop> send(const protocol::CommandMessage& m) {
     const auto status = can_.write(protocol::pack(m, pair_));
     // would_block: the queue is full; the confirmation's wait sends another copy.
-    if (status == platform::IoStatus::ok || status == platform::IoStatus::would_block) return std::nullopt;
+    if (status == board::IoStatus::ok || status == board::IoStatus::would_block) return std::nullopt;
     return failed("sending on", status);
   }
 
  private:
-  Stop failed(const char* doing, platform::IoStatus status) const {
-    if (status == platform::IoStatus::interface_down)
+  Stop failed(const char* doing, board::IoStatus status) const {
+    if (status == board::IoStatus::interface_down)
       return Stop{kSessionFailed, fmt::format("{} is down", can_.interface())};
-    if (status == platform::IoStatus::interface_gone)
+    if (status == board::IoStatus::interface_gone)
       return Stop{kSessionFailed, fmt::format("{} is gone", can_.interface())};
     return Stop{kSessionFailed, fmt::format("{} {}: {}", doing, can_.interface(), std::strerror(can_.last_errno()))};
   }
@@ -113,11 +113,11 @@ class SessionIo {
     std::int64_t t_us = 0;
     while (true) {
       const auto status = can_.read(frame, t_us);
-      if (status == platform::IoStatus::ok) {
+      if (status == board::IoStatus::ok) {
         watch_.on_frame(frame, t_us);
-      } else if (status == platform::IoStatus::would_block) {
+      } else if (status == board::IoStatus::would_block) {
         return std::nullopt;
-      } else if (status != platform::IoStatus::skipped && status != platform::IoStatus::error_frame) {
+      } else if (status != board::IoStatus::skipped && status != board::IoStatus::error_frame) {
         return failed("reading", status);
       }
     }
@@ -134,7 +134,7 @@ class SessionIo {
     }
   }
 
-  platform::SocketCan can_;
+  board::SocketCan can_;
   PairWatch watch_;
   std::uint8_t pair_;
   std::FILE* progress_;
@@ -457,7 +457,7 @@ int run_session(const RunnerOptions& options) {
     void operator()(std::FILE* f) const { std::fclose(f); }
   };
   const std::unique_ptr<std::FILE, Closer> progress_owner(progress);
-  auto can = platform::SocketCan::open({options.can, {}, 0, true});
+  auto can = board::SocketCan::open({options.can, {}, 0, true});
   if (!can) {
     fmt::print(stderr, "lever-study: {}\n", can.error().message);
     return kSessionFailed;

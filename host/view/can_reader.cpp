@@ -15,7 +15,7 @@ std::int64_t realtime_us() noexcept {
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
 }
 
-CanReader::CanReader(platform::SocketCan can, LiveMonitor& live)
+CanReader::CanReader(board::SocketCan can, LiveMonitor& live)
     : can_(std::move(can)), live_(live), thread_([this](std::stop_token stop) { run(std::move(stop)); }) {}
 
 void CanReader::run(std::stop_token stop) {
@@ -34,13 +34,12 @@ void CanReader::run(std::stop_token stop) {
         while (n < batch.size()) {
           std::int64_t t_us = 0;
           const auto status = can_.read(batch[n].frame, t_us);
-          if (status == platform::IoStatus::ok) {
+          if (status == board::IoStatus::ok) {
             batch[n++].t_us = t_us != 0 ? t_us : realtime_us();
-          } else if (status == platform::IoStatus::skipped) {
+          } else if (status == board::IoStatus::skipped) {
             continue;
           } else {
-            if (status == platform::IoStatus::interface_down || status == platform::IoStatus::interface_gone)
-              link_up = false;
+            if (status == board::IoStatus::interface_down || status == board::IoStatus::interface_gone) link_up = false;
             break;
           }
         }
@@ -48,7 +47,7 @@ void CanReader::run(std::stop_token stop) {
     } else {
       // Down or gone: look again every 0.2 s, reopening a socket whose interface was made anew.
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
-      link_up = can_.recover() == platform::LinkState::up;
+      link_up = can_.recover() == board::LinkState::up;
     }
     const std::lock_guard lock(live_.mutex);
     for (std::size_t i = 0; i < n; ++i) live_.monitor.on_frame(batch[i].frame, batch[i].t_us);

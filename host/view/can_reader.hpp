@@ -4,21 +4,21 @@
 #include <stop_token>
 #include <thread>
 
-#include "lever/platform/socketcan.hpp"
+#include "lever/board/socketcan.hpp"
 #include "live_monitor.hpp"
 
 namespace lever::view {
 
 class CanReader {
  public:
-  CanReader(platform::SocketCan can, LiveMonitor& live);
+  CanReader(board::SocketCan can, LiveMonitor& live);
   CanReader(const CanReader&) = delete;
   CanReader& operator=(const CanReader&) = delete;
 
  private:
   void run(std::stop_token stop);
 
-  platform::SocketCan can_;
+  board::SocketCan can_;
   LiveMonitor& live_;
   std::jthread thread_;  // last: it starts once the members it uses exist, and stops before they go
 };

@@ -21,8 +21,8 @@
 
 #include "can_reader.hpp"
 #include "curses_screen.hpp"
-#include "lever/platform/interface_name.hpp"
-#include "lever/platform/socketcan.hpp"
+#include "lever/board/interface_name.hpp"
+#include "lever/board/socketcan.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/program/parse.hpp"
 #include "lever/program/text.hpp"
@@ -34,7 +34,7 @@
 namespace {
 
 namespace program = lever::program;
-namespace platform = lever::platform;
+namespace board = lever::board;
 namespace view = lever::view;
 
 std::atomic<bool> g_stop{false};
@@ -71,7 +71,7 @@ struct Options {
 
 // Opens a status input: "-" is stdin, anything else a file or FIFO that must exist (a FIFO opened without
 // waiting for its writer).
-std::optional<std::string> open_status(const std::string& path, platform::UniqueFd& fd) {
+std::optional<std::string> open_status(const std::string& path, board::UniqueFd& fd) {
   if (path == "-") {
     fd.reset(::dup(STDIN_FILENO));
     if (!fd) return fmt::format("--status -: {}", std::strerror(errno));
@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
   app.add_flag("--ascii", options.ascii, "sparklines in ASCII, not in Unicode block elements");
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
 
-  if (const auto problem = platform::interface_name_problem(options.can))
+  if (const auto problem = board::interface_name_problem(options.can))
     return fail(program::kBadInput, fmt::format("--can: {}", *problem));
   if (std::count(options.status.begin(), options.status.end(), std::string("-")) > 1)
     return fail(program::kBadInput, "--status -: stdin can be given once");
@@ -205,13 +205,13 @@ int main(int argc, char** argv) {
   if (!options.json && !isatty(STDOUT_FILENO))
     return fail(program::kBadInput, "stdout is not a terminal: the screen needs one (--json prints lines instead)");
 
-  std::vector<platform::UniqueFd> status_fds(options.status.size());
+  std::vector<board::UniqueFd> status_fds(options.status.size());
   for (std::size_t i = 0; i < options.status.size(); ++i)
     if (const auto problem = open_status(options.status[i], status_fds[i])) return fail(program::kBadInput, *problem);
 
-  platform::SocketCanConfig can_config;
+  board::SocketCanConfig can_config;
   can_config.interface = options.can;
-  auto can = platform::SocketCan::open(can_config);
+  auto can = board::SocketCan::open(can_config);
   if (!can) {
     const int error = can.error().errno_value;
     const std::string message = can.error().message + can_hint(error, options.can);

@@ -12,7 +12,7 @@
 
 namespace lever::view {
 
-StatusReader::StatusReader(platform::UniqueFd fd, std::size_t source, LiveMonitor& live)
+StatusReader::StatusReader(board::UniqueFd fd, std::size_t source, LiveMonitor& live)
     : fd_(std::move(fd)),
       source_(source),
       live_(live),

@@ -6,7 +6,7 @@
 #include <string>
 #include <thread>
 
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/unique_fd.hpp"
 #include "live_monitor.hpp"
 
 namespace lever::view {
@@ -17,7 +17,7 @@ class StatusReader {
   static constexpr std::size_t kMaxLine = 64 * 1024;
 
   // `fd` open for reading; `source` numbers the input in the monitor.
-  StatusReader(platform::UniqueFd fd, std::size_t source, LiveMonitor& live);
+  StatusReader(board::UniqueFd fd, std::size_t source, LiveMonitor& live);
   StatusReader(const StatusReader&) = delete;
   StatusReader& operator=(const StatusReader&) = delete;
 
@@ -25,7 +25,7 @@ class StatusReader {
   void run(std::stop_token stop);
   void on_line(const std::string& line);
 
-  platform::UniqueFd fd_;
+  board::UniqueFd fd_;
   std::size_t source_;
   LiveMonitor& live_;
   std::jthread thread_;

@@ -7,11 +7,11 @@
 set -uo pipefail
 check=$1
 source "$(dirname "$0")/../cli/lib.sh"
-for room in program common codec_cli firmware/core firmware/mcu platform firmware/app host/codec_tool host/bridge host/ctl host/view host/plot host/study \
+for room in program common codec_cli firmware/core firmware/mcu board firmware/app host/codec_tool host/bridge host/ctl host/view host/plot host/study \
   hil/devices hil/include hil/src hil/app hil/fw-sim; do
   mkdir -p "$work/tree/$room"
 done
-printf '#include "lever/app/fw_config.hpp"\n#include "lever/platform/result.hpp"\n' >"$work/tree/firmware/app/main.cpp"
+printf '#include "lever/app/fw_config.hpp"\n#include "lever/board/result.hpp"\n' >"$work/tree/firmware/app/main.cpp"
 printf '#include "lever/hil/simulation.hpp"\n#include "lever/app/stats_line.hpp"\n' >"$work/tree/hil/fw-sim/main.cpp"
 printf '#include "lever/hil/hosted_rig.hpp"\n#include "lever/study/pair_watch.hpp"\n' >"$work/tree/hil/app/study.cpp"
 "$check" "$work/tree" >"$work/out"; code=$?

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "lever/platform/modbus_gauge.hpp"
+#include "lever/board/modbus_gauge.hpp"
 
 namespace lever::test {
 
@@ -23,8 +23,8 @@ bool eventually(Condition condition, std::chrono::milliseconds limit = std::chro
 }
 
 // The registers an amplifier would hold for `value`: the inverse of the decoder, written separately.
-inline std::vector<std::uint16_t> registers_for(double value, platform::RegisterType type, platform::WordOrder order) {
-  using platform::RegisterType;
+inline std::vector<std::uint16_t> registers_for(double value, board::RegisterType type, board::WordOrder order) {
+  using board::RegisterType;
   std::uint32_t bits = 0;
   switch (type) {
     case RegisterType::int16:
@@ -43,7 +43,7 @@ inline std::vector<std::uint16_t> registers_for(double value, platform::Register
   }
   const auto high = static_cast<std::uint16_t>(bits >> 16);
   const auto low = static_cast<std::uint16_t>(bits & 0xFFFF);
-  if (order == platform::WordOrder::high_first) return {high, low};
+  if (order == board::WordOrder::high_first) return {high, low};
   return {low, high};
 }
 
@@ -51,9 +51,8 @@ inline std::vector<std::uint16_t> registers_for(double value, platform::Register
 // server sees a timeout (and sets a shorter one), even on a loaded machine: a pty's bytes are handed over by a
 // kernel worker thread, which CPU hogs can hold up for tens of milliseconds. The backoff is cut so a test
 // that sees a few reconnects stays short.
-inline platform::ModbusGaugeConfig test_config(platform::ModbusTransport transport,
-                                               platform::GaugeRegisterMap registers = {}) {
-  platform::ModbusGaugeConfig config;
+inline board::ModbusGaugeConfig test_config(board::ModbusTransport transport, board::GaugeRegisterMap registers = {}) {
+  board::ModbusGaugeConfig config;
   config.transport = std::move(transport);
   config.registers = registers;
   config.response_timeout = std::chrono::seconds(1);
@@ -63,7 +62,7 @@ inline platform::ModbusGaugeConfig test_config(platform::ModbusTransport transpo
 }
 
 // The newest sample's sequence number, 0 before the first.
-inline std::uint64_t sequence_of(const platform::ModbusGauge& gauge) {
+inline std::uint64_t sequence_of(const board::ModbusGauge& gauge) {
   const auto sample = gauge.latest();
   return sample ? sample->sequence : 0;
 }

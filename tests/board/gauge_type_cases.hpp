@@ -13,22 +13,22 @@
 namespace lever::test {
 
 struct TypeCase {
-  platform::RegisterType type;
-  platform::WordOrder order;
+  board::RegisterType type;
+  board::WordOrder order;
   double first;
   double second;
 };
 
 // Values whose two words differ, so a swapped word order reads something else; negative ones for signed types.
 inline const std::array<TypeCase, 8> kTypeCases{{
-    {platform::RegisterType::int16, platform::WordOrder::high_first, 1234, -1234},
-    {platform::RegisterType::uint16, platform::WordOrder::high_first, 54321, 7},
-    {platform::RegisterType::int32, platform::WordOrder::high_first, -123456789, 74565},
-    {platform::RegisterType::int32, platform::WordOrder::low_first, -123456789, 74565},
-    {platform::RegisterType::uint32, platform::WordOrder::high_first, 4000000000.0, 74565},
-    {platform::RegisterType::uint32, platform::WordOrder::low_first, 4000000000.0, 74565},
-    {platform::RegisterType::float32, platform::WordOrder::high_first, static_cast<double>(3.14159274f), -12.5},
-    {platform::RegisterType::float32, platform::WordOrder::low_first, static_cast<double>(3.14159274f), -12.5},
+    {board::RegisterType::int16, board::WordOrder::high_first, 1234, -1234},
+    {board::RegisterType::uint16, board::WordOrder::high_first, 54321, 7},
+    {board::RegisterType::int32, board::WordOrder::high_first, -123456789, 74565},
+    {board::RegisterType::int32, board::WordOrder::low_first, -123456789, 74565},
+    {board::RegisterType::uint32, board::WordOrder::high_first, 4000000000.0, 74565},
+    {board::RegisterType::uint32, board::WordOrder::low_first, 4000000000.0, 74565},
+    {board::RegisterType::float32, board::WordOrder::high_first, static_cast<double>(3.14159274f), -12.5},
+    {board::RegisterType::float32, board::WordOrder::low_first, static_cast<double>(3.14159274f), -12.5},
 }};
 
 inline std::int64_t monotonic_now_ns() {
@@ -39,9 +39,9 @@ inline std::int64_t monotonic_now_ns() {
 
 // The server holds `first` in the registers of `function` (and something else in the other table); the gauge
 // must read it, scaled, with a CLOCK_MONOTONIC stamp; then the server changes to `second` and the gauge follows.
-inline void check_reads_and_follows(ModbusTestServer& server, const platform::ModbusTransport& transport,
-                                    const TypeCase& type_case, platform::RegisterFunction function) {
-  using platform::RegisterFunction;
+inline void check_reads_and_follows(ModbusTestServer& server, const board::ModbusTransport& transport,
+                                    const TypeCase& type_case, board::RegisterFunction function) {
+  using board::RegisterFunction;
   constexpr int kAddress = 3;
   constexpr double kScale = 0.5;
   constexpr double kOffset = -2.0;
@@ -53,16 +53,16 @@ inline void check_reads_and_follows(ModbusTestServer& server, const platform::Mo
   };
   hold(type_case.first);
 
-  platform::GaugeRegisterMap map;
+  board::GaugeRegisterMap map;
   map.function = function;
   map.address = kAddress;
   map.type = type_case.type;
   map.word_order = type_case.order;
   map.scale = kScale;
   map.offset = kOffset;
-  auto opened = platform::ModbusGauge::open(test_config(transport, map));
+  auto opened = board::ModbusGauge::open(test_config(transport, map));
   REQUIRE(opened.ok());
-  const platform::ModbusGauge& gauge = opened.value();
+  const board::ModbusGauge& gauge = opened.value();
 
   auto holds = [&](double raw) {
     return [&gauge, raw] {

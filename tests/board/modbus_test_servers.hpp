@@ -13,7 +13,7 @@
 #include <string>
 #include <thread>
 
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/unique_fd.hpp"
 
 namespace lever::test {
 
@@ -74,7 +74,7 @@ class TcpTestServer final : public ModbusTestServer {
  private:
   void run(const std::stop_token& stop);
   modbus_t* context_;
-  platform::UniqueFd listener_;
+  board::UniqueFd listener_;
   int port_ = 0;
   std::jthread thread_;
 };
@@ -89,8 +89,8 @@ class PtyPair {
   const std::string& slave_path() const { return slave_path_; }
 
  private:
-  platform::UniqueFd master_;
-  platform::UniqueFd slave_held_open_;
+  board::UniqueFd master_;
+  board::UniqueFd slave_held_open_;
   std::string slave_path_;
 };
 

@@ -6,7 +6,7 @@
 
 #include <utility>
 
-#include "lever/platform/pwm_motor.hpp"
+#include "lever/board/pwm_motor.hpp"
 #include "pwm_sysfs_tree.hpp"
 
 namespace lever::test {
@@ -14,8 +14,8 @@ namespace lever::test {
 inline constexpr unsigned kPwmTestChip = 2;
 inline constexpr unsigned kPwmTestChannel = 1;
 
-inline platform::PwmMotorConfig pwm_test_config(const PwmSysfsTree& tree) {
-  platform::PwmMotorConfig c;
+inline board::PwmMotorConfig pwm_test_config(const PwmSysfsTree& tree) {
+  board::PwmMotorConfig c;
   c.sysfs_root = tree.root();
   c.pwm_chip = kPwmTestChip;
   c.pwm_channel = kPwmTestChannel;
@@ -31,8 +31,8 @@ inline platform::PwmMotorConfig pwm_test_config(const PwmSysfsTree& tree) {
 
 // In a child: a motor driving 0.3 Nm (duty 15000), so that a stop has something to undo. Exit code 90: it did not
 // open; 91: it did not drive.
-inline platform::PwmMotor driving_motor(const PwmSysfsTree& tree) {
-  auto motor = platform::PwmMotor::open(pwm_test_config(tree));
+inline board::PwmMotor driving_motor(const PwmSysfsTree& tree) {
+  auto motor = board::PwmMotor::open(pwm_test_config(tree));
   if (!motor) ::_exit(90);
   motor.value().command({0.3, true});
   if (tree.read("duty_cycle") != "15000" || tree.read("enable") != "1") ::_exit(91);

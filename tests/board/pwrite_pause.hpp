@@ -1,6 +1,6 @@
 #pragma once
 // A pause inside one pwrite, to hold a thread in the middle of what it is doing (a motor command between its
-// writes) while another thread acts. This test program's own pwrite stands in for libc's (the platform library
+// writes) while another thread acts. This test program's own pwrite stands in for libc's (the board library
 // is linked in statically, so its calls land here); unless armed it is the system call and nothing else.
 #include <chrono>
 #include <string_view>

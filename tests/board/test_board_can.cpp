@@ -18,13 +18,13 @@
 
 #include "alloc_counter.hpp"
 #include "can_peer.hpp"
-#include "lever/platform/board_can_port.hpp"
+#include "lever/board/board_can_port.hpp"
 #include "lever/protocol/messages.hpp"
 
-using lever::platform::BoardCanPort;
-using lever::platform::BoardCanPortConfig;
-using lever::platform::CanBusState;
-using lever::platform::LinkState;
+using lever::board::BoardCanPort;
+using lever::board::BoardCanPortConfig;
+using lever::board::CanBusState;
+using lever::board::LinkState;
 using lever::protocol::CanFrame;
 using lever::protocol::Role;
 using lever::test::Background;
@@ -172,7 +172,7 @@ std::string kernel_state(const std::string& interface) {
 }
 
 std::string upper_name(CanBusState s) {
-  std::string n(lever::platform::name(s));
+  std::string n(lever::board::name(s));
   for (auto& c : n) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return n;
 }
@@ -560,7 +560,7 @@ TEST_CASE("the Kvaser controllers: 1 Mbit/s bit timing, and the port's bus state
   std::printf(
       "board-can: %s sent %u frames with %s down: port says %s, kernel says %s, error frames %llu, "
       "ack errors %llu\n",
-      if_a.c_str(), taken, if_b.c_str(), std::string(lever::platform::name(a.bus_state())).c_str(), state_alone.c_str(),
+      if_a.c_str(), taken, if_b.c_str(), std::string(lever::board::name(a.bus_state())).c_str(), state_alone.c_str(),
       static_cast<unsigned long long>(a.bus_counts().error_frames),
       static_cast<unsigned long long>(a.bus_counts().ack_errors));
   CHECK(taken == 40);
@@ -585,6 +585,6 @@ TEST_CASE("the Kvaser controllers: 1 Mbit/s bit timing, and the port's bus state
   check_crossing(a, b, kMotion, 20, 1000);
   check_crossing(b, a, kForce, 20, 1000);
   std::printf("board-can: %s with restart-ms 100 after down/up: port %s, kernel %s; frames crossed both ways\n",
-              if_a.c_str(), std::string(lever::platform::name(a.bus_state())).c_str(), kernel_state(if_a).c_str());
+              if_a.c_str(), std::string(lever::board::name(a.bus_state())).c_str(), kernel_state(if_a).c_str());
   check_no_allocations();
 }

@@ -6,14 +6,14 @@
 #include <set>
 #include <string>
 
-#include "lever/platform/board_can_port.hpp"
-#include "lever/platform/interface_name.hpp"
+#include "lever/board/board_can_port.hpp"
+#include "lever/board/interface_name.hpp"
 #include "lever/protocol/messages.hpp"
 
-using lever::platform::BoardCanPort;
-using lever::platform::BoardCanPortConfig;
-using lever::platform::CanFilter;
-using lever::platform::lever_pair_filters;
+using lever::board::BoardCanPort;
+using lever::board::BoardCanPortConfig;
+using lever::board::CanFilter;
+using lever::board::lever_pair_filters;
 
 namespace {
 
@@ -87,7 +87,7 @@ TEST_CASE("the port's config is checked field by field", "[board_can]") {
 }
 
 TEST_CASE("interface names as the kernel takes them (dev_valid_name), and no '%'", "[board_can]") {
-  using lever::platform::interface_name_problem;
+  using lever::board::interface_name_problem;
   using namespace std::string_literals;
   for (const std::string& good : {"can0"s, "vcan1"s, "fifteen-bytes-x"s, "..."s, ".can"s, "-x"s, "can\x01"s,
                                   "c\xC3\xA4n0"s /* can with a-umlaut: C3 A4 */, "a,b=c"s}) {

@@ -5,11 +5,11 @@
 
 #include <catch2/catch.hpp>
 
-#include "lever/platform/can_bus_monitor.hpp"
+#include "lever/board/can_bus_monitor.hpp"
 
-using lever::platform::CanBusMonitor;
-using lever::platform::CanBusState;
-using lever::platform::CanErrorFrame;
+using lever::board::CanBusMonitor;
+using lever::board::CanBusState;
+using lever::board::CanErrorFrame;
 
 namespace {
 
@@ -122,7 +122,7 @@ TEST_CASE("states are named as ip -details link spells them", "[can_bus_monitor]
 }
 
 TEST_CASE("the classes asked of the kernel are the ones the monitor reads", "[can_bus_monitor]") {
-  using lever::platform::kMonitoredErrorClasses;
+  using lever::board::kMonitoredErrorClasses;
   for (const std::uint32_t c : {CAN_ERR_CRTL, CAN_ERR_BUSOFF, CAN_ERR_RESTARTED, CAN_ERR_ACK, CAN_ERR_BUSERROR,
                                 CAN_ERR_PROT, CAN_ERR_TX_TIMEOUT}) {
     CHECK((kMonitoredErrorClasses & c) == c);

@@ -2,14 +2,14 @@
 #include <catch2/catch.hpp>
 #include <vector>
 
-#include "lever/platform/edge_tracker.hpp"
+#include "lever/board/edge_tracker.hpp"
 
+using lever::board::EdgeTracker;
+using lever::board::EncoderLine;
+using lever::board::LineEvent;
 using lever::fw::ab;
 using lever::fw::AbState;
 using lever::fw::EncoderEdge;
-using lever::platform::EdgeTracker;
-using lever::platform::EncoderLine;
-using lever::platform::LineEvent;
 
 namespace {
 

@@ -8,13 +8,13 @@
 
 #include "gauge_test_support.hpp"
 #include "lever/app/gauge_port.hpp"
+#include "lever/board/modbus_gauge_presets.hpp"
+#include "lever/board/monotonic_clock.hpp"
 #include "lever/fw/strain_gauge.hpp"
-#include "lever/platform/modbus_gauge_presets.hpp"
-#include "lever/platform/monotonic_clock.hpp"
 #include "modbus_test_servers.hpp"
 
 using namespace lever;
-using namespace lever::platform;
+using namespace lever::board;
 
 TEST_CASE(
     "an amplifier that stops answering is a stale force exactly at the window's end; one that comes back is "
@@ -37,7 +37,7 @@ TEST_CASE(
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     ++tick;
     port.now_tick = tick;
-    port.now_ns = lever::platform::monotonic_ns();
+    port.now_ns = lever::board::monotonic_ns();
     const auto t0 = std::chrono::steady_clock::now();
     const auto reading = port.latest();
     slowest_latest_us = std::max(
@@ -95,7 +95,7 @@ TEST_CASE(
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     ++tick;
     port_of_core.now_tick = tick;
-    port_of_core.now_ns = lever::platform::monotonic_ns();
+    port_of_core.now_ns = lever::board::monotonic_ns();
     const auto force = core_gauge.update(port_of_core.latest(), tick);
     stale_seen = stale_seen || !force;
     return force;

@@ -3,11 +3,11 @@
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "lever/platform/gpio_encoder.hpp"
+#include "lever/board/gpio_encoder.hpp"
 
-using lever::platform::GpioEncoder;
-using lever::platform::GpioEncoderConfig;
-using lever::platform::LineRef;
+using lever::board::GpioEncoder;
+using lever::board::GpioEncoderConfig;
+using lever::board::LineRef;
 
 namespace {
 

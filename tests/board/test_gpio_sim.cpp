@@ -22,16 +22,16 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "lever/board/gpio_encoder.hpp"
 #include "lever/fw/lever.hpp"
-#include "lever/platform/gpio_encoder.hpp"
 
 extern char** environ;
 
+using lever::board::GpioEncoder;
+using lever::board::GpioEncoderConfig;
+using lever::board::LineRef;
 using lever::fw::AbState;
 using lever::fw::EncoderEdge;
-using lever::platform::GpioEncoder;
-using lever::platform::GpioEncoderConfig;
-using lever::platform::LineRef;
 
 namespace {
 

@@ -3,12 +3,12 @@
 // print.
 #include <catch2/catch.hpp>
 
-#include "lever/platform/kernel_preemption.hpp"
+#include "lever/board/kernel_preemption.hpp"
 
-using lever::platform::describe;
-using lever::platform::KernelPreemptionSources;
-using lever::platform::Preemption;
-using lever::platform::preemption_of;
+using lever::board::describe;
+using lever::board::KernelPreemptionSources;
+using lever::board::Preemption;
+using lever::board::preemption_of;
 
 namespace {
 

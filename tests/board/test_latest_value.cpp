@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <thread>
 
-#include "lever/platform/latest_value.hpp"
+#include "lever/board/latest_value.hpp"
 
-using lever::platform::LatestValue;
+using lever::board::LatestValue;
 
 namespace {
 

@@ -23,16 +23,16 @@
 #include <thread>
 #include <vector>
 
-#include "lever/platform/loop_watchdog.hpp"
-#include "lever/platform/monotonic_clock.hpp"
-#include "lever/platform/motor_stop_signals.hpp"
-#include "lever/platform/pwm_motor.hpp"
-#include "lever/platform/realtime_loop.hpp"
+#include "lever/board/loop_watchdog.hpp"
+#include "lever/board/monotonic_clock.hpp"
+#include "lever/board/motor_stop_signals.hpp"
+#include "lever/board/pwm_motor.hpp"
+#include "lever/board/realtime_loop.hpp"
 #include "pwm_sysfs_tree.hpp"
 
 using namespace std::chrono_literals;
-using lever::platform::LoopWatchdog;
-using lever::platform::RealtimeLoop;
+using lever::board::LoopWatchdog;
+using lever::board::RealtimeLoop;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -230,16 +230,16 @@ KillTimes run_and_hang(Hang hang) {
     const rlimit no_core{0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);  // SIGABRT's default action writes no core into the test's directory
     manager.export_for(::getpid());
-    lever::platform::PwmMotorConfig motor_config;
+    lever::board::PwmMotorConfig motor_config;
     motor_config.sysfs_root = tree.root();
     motor_config.torque_constant_nm_per_a = 0.05;
     motor_config.full_scale_current_a = 20.0;
     motor_config.positive_torque_only = true;
-    auto motor = lever::platform::PwmMotor::open(motor_config);
-    if (!motor || !lever::platform::install_motor_stop_signal_handlers()) ::_exit(3);
+    auto motor = lever::board::PwmMotor::open(motor_config);
+    if (!motor || !lever::board::install_motor_stop_signal_handlers()) ::_exit(3);
     auto watchdog = LoopWatchdog::open({});
     if (!watchdog) ::_exit(4);
-    lever::platform::RealtimeConfig loop_config;
+    lever::board::RealtimeConfig loop_config;
     loop_config.fifo_priority = 0;
     loop_config.lock_memory = false;
     loop_config.prefault_stack_bytes = 64 * 1024;
@@ -255,7 +255,7 @@ KillTimes run_and_hang(Hang hang) {
           // machine tick 300 itself may never be served
           if (tick >= 300 && !hung) {
             hung = true;
-            const Stuck now{lever::platform::monotonic_ns(), realtime_ns()};
+            const Stuck now{lever::board::monotonic_ns(), realtime_ns()};
             if (::write(stuck_pipe[1], &now, sizeof now) != sizeof now) ::_exit(6);
             if (hang == Hang::stuck_in_step)
               for (;;) ::pause();  // a step that never ends: a hung write, a lock never released
@@ -279,7 +279,7 @@ KillTimes run_and_hang(Hang hang) {
     if (const auto m = manager.receive_stamped(1ms)) {
       if (contains(m->text, "READY=1")) ready = true;
       if (contains(m->text, "WATCHDOG=1")) {
-        last_feed_ns = lever::platform::monotonic_ns();
+        last_feed_ns = lever::board::monotonic_ns();
         feeds_sent_ns.push_back(m->sent_realtime_ns);
       }
     }
@@ -291,7 +291,7 @@ KillTimes run_and_hang(Hang hang) {
       }
       if (hang == Hang::stopped_process) ::kill(child, SIGSTOP);
     }
-    const std::int64_t now = lever::platform::monotonic_ns();
+    const std::int64_t now = lever::board::monotonic_ns();
     // Judged from the hang on: a child starved of the CPU before its 300th tick is not the case measured.
     if (stuck_ns != 0 && ready && last_feed_ns &&
         now - *last_feed_ns > std::chrono::nanoseconds(kWatchdogSec).count()) {
@@ -302,7 +302,7 @@ KillTimes run_and_hang(Hang hang) {
   }
   int status = 0;
   REQUIRE(::waitpid(child, &status, 0) == child);
-  const std::int64_t exit_ns = lever::platform::monotonic_ns();
+  const std::int64_t exit_ns = lever::board::monotonic_ns();
   ::close(stuck_pipe[0]);
   REQUIRE(stuck_ns != 0);
   REQUIRE(kill_ns.has_value());

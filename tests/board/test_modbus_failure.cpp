@@ -4,9 +4,9 @@
 #include <catch2/catch.hpp>
 #include <cerrno>
 
-#include "lever/platform/modbus_failure.hpp"
+#include "lever/board/modbus_failure.hpp"
 
-using namespace lever::platform;
+using namespace lever::board;
 
 TEST_CASE("a timeout and a broken link reconnect, while CRC, exception and protocol errors keep the connection") {
   CHECK(classify_modbus_errno(ETIMEDOUT) == ModbusFailure::timeout);

@@ -4,10 +4,10 @@
 #include <limits>
 #include <string>
 
-#include "lever/platform/modbus_gauge_config.hpp"
-#include "lever/platform/modbus_gauge_presets.hpp"
+#include "lever/board/modbus_gauge_config.hpp"
+#include "lever/board/modbus_gauge_presets.hpp"
 
-using namespace lever::platform;
+using namespace lever::board;
 using namespace std::chrono_literals;
 
 namespace {

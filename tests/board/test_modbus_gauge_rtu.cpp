@@ -9,7 +9,7 @@
 #include "gauge_type_cases.hpp"
 #include "modbus_test_servers.hpp"
 
-using namespace lever::platform;
+using namespace lever::board;
 using namespace lever::test;
 using namespace std::chrono_literals;
 

@@ -9,10 +9,10 @@
 
 #include "gauge_test_support.hpp"
 #include "gauge_type_cases.hpp"
-#include "lever/platform/modbus_gauge_presets.hpp"
+#include "lever/board/modbus_gauge_presets.hpp"
 #include "modbus_test_servers.hpp"
 
-using namespace lever::platform;
+using namespace lever::board;
 using namespace lever::test;
 using namespace std::chrono_literals;
 

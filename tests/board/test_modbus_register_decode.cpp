@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "lever/platform/modbus_register_decode.hpp"
+#include "lever/board/modbus_register_decode.hpp"
 
-using lever::platform::decode_registers;
-using lever::platform::RegisterType;
-using lever::platform::WordOrder;
+using lever::board::decode_registers;
+using lever::board::RegisterType;
+using lever::board::WordOrder;
 
 namespace {
 

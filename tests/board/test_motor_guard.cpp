@@ -1,4 +1,4 @@
-// The motor guard (platform/motor_guard.hpp) as lever-fw runs it: the real program (lever-fw --motor-guard) exec'd
+// The motor guard (board/motor_guard.hpp) as lever-fw runs it: the real program (lever-fw --motor-guard) exec'd
 // beside a lever process on a temporary sysfs tree. Each case runs its lever in a forked child: a guard is one per
 // process, and its end latches the process's emergency stop. What is checked is what the guard wrote to the PWM,
 // never what it says: the defined inactive state is duty 0 with the PWM enabled.
@@ -14,15 +14,15 @@
 #include <thread>
 
 #include "fork_child.hpp"
-#include "lever/platform/monotonic_clock.hpp"
-#include "lever/platform/motor_guard.hpp"
-#include "lever/platform/pwm_motor.hpp"
+#include "lever/board/monotonic_clock.hpp"
+#include "lever/board/motor_guard.hpp"
+#include "lever/board/pwm_motor.hpp"
 #include "pwm_sysfs_tree.hpp"
 #include "pwm_test_motor.hpp"
 
-using lever::platform::MotorGuard;
-using lever::platform::MotorGuardConfig;
-using lever::platform::PwmMotor;
+using lever::board::MotorGuard;
+using lever::board::MotorGuardConfig;
+using lever::board::PwmMotor;
 using lever::test::driving_motor;
 using lever::test::PwmSysfsTree;
 using lever::test::wait_status_of_child;
@@ -61,7 +61,7 @@ TEST_CASE("MotorGuard: a loop that stops stepping has its motor put in the inact
     auto guard = MotorGuard::start(guard_config(std::chrono::milliseconds(200)), motor.guard_handles());
     if (!guard) return 10;
     for (int i = 0; i < 300; ++i) {
-      guard.value().stepped(lever::platform::monotonic_ns());
+      guard.value().stepped(lever::board::monotonic_ns());
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     if (guard.value().take_trip() || !(tree.read("duty_cycle") == "15000")) return 11;  // stepping: left alone
@@ -130,8 +130,8 @@ TEST_CASE("MotorGuard: a guard killed has the lever stop its motor itself and sa
 
 TEST_CASE("MotorGuard: the guard program refuses a spec it cannot read, and a program that is not there fails start",
           "[guard]") {
-  CHECK(lever::platform::run_motor_guard("lever=1") == 2);
-  CHECK(lever::platform::run_motor_guard("duty=3,enable=4,nonsense") == 2);
+  CHECK(lever::board::run_motor_guard("lever=1") == 2);
+  CHECK(lever::board::run_motor_guard("duty=3,enable=4,nonsense") == 2);
   PwmSysfsTree tree(lever::test::kPwmTestChip, lever::test::kPwmTestChannel);
   const int status = wait_status_of_child([&] {
     auto motor = PwmMotor::open(lever::test::pwm_test_config(tree));

@@ -16,19 +16,19 @@
 
 #include "alloc_counter.hpp"
 #include "fork_child.hpp"
-#include "lever/platform/motor_stop_signals.hpp"
-#include "lever/platform/pwm_motor.hpp"
-#include "lever/platform/torque_to_duty.hpp"
+#include "lever/board/motor_stop_signals.hpp"
+#include "lever/board/pwm_motor.hpp"
+#include "lever/board/torque_to_duty.hpp"
 #include "pwm_sysfs_tree.hpp"
 #include "pwm_test_motor.hpp"
 #include "pwrite_pause.hpp"
 
+using lever::board::LineRef;
+using lever::board::MotorLineConfig;
+using lever::board::PwmMotor;
+using lever::board::PwmMotorConfig;
+using lever::board::TorqueToDuty;
 using lever::fw::MotorCommand;
-using lever::platform::LineRef;
-using lever::platform::MotorLineConfig;
-using lever::platform::PwmMotor;
-using lever::platform::PwmMotorConfig;
-using lever::platform::TorqueToDuty;
 using lever::test::driving_motor;
 using lever::test::PwmSysfsTree;
 using lever::test::wait_status_of_child;
@@ -414,10 +414,10 @@ TEST_CASE("PwmMotor: SIGINT and SIGTERM stop the motor in the handler; a second 
   CAPTURE(signal_number);
   PwmSysfsTree tree(kChip, kChannel);
   const int status = wait_status_of_child([&] {
-    if (!lever::platform::install_motor_stop_signal_handlers()) return 80;
+    if (!lever::board::install_motor_stop_signal_handlers()) return 80;
     PwmMotor motor = driving_motor(tree);
     ::raise(signal_number);
-    if (lever::platform::stop_signal_received() != signal_number) return 1;
+    if (lever::board::stop_signal_received() != signal_number) return 1;
     // The handler alone, no destructor: it must have stopped the motor by itself.
     if (!stopped(tree)) return 2;
     ::raise(signal_number);
@@ -443,7 +443,7 @@ TEST_CASE("PwmMotor: a normal exit, exit() or a return from main, with the motor
 TEST_CASE("PwmMotor: abort() (so std::terminate) stops the motor before the process dies", "[motor]") {
   PwmSysfsTree tree(kChip, kChannel);
   const int status = wait_status_of_child([&] {
-    if (!lever::platform::install_motor_stop_signal_handlers()) return 80;
+    if (!lever::board::install_motor_stop_signal_handlers()) return 80;
     PwmMotor motor = driving_motor(tree);
     std::abort();
     return 1;

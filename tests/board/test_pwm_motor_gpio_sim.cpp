@@ -13,14 +13,14 @@
 #include <string>
 
 #include "fork_child.hpp"
-#include "lever/platform/motor_stop_signals.hpp"
-#include "lever/platform/pwm_motor.hpp"
+#include "lever/board/motor_stop_signals.hpp"
+#include "lever/board/pwm_motor.hpp"
 #include "pwm_sysfs_tree.hpp"
 
-using lever::platform::LineRef;
-using lever::platform::MotorLineConfig;
-using lever::platform::PwmMotor;
-using lever::platform::PwmMotorConfig;
+using lever::board::LineRef;
+using lever::board::MotorLineConfig;
+using lever::board::PwmMotor;
+using lever::board::PwmMotorConfig;
 using lever::test::PwmSysfsTree;
 
 namespace {
@@ -189,13 +189,13 @@ TEST_CASE("after a SIGINT the next command drops the enable line, the process st
   REQUIRE(pid >= 0);
   if (pid == 0) {
     ::alarm(20);
-    if (!lever::platform::install_motor_stop_signal_handlers()) ::_exit(80);
+    if (!lever::board::install_motor_stop_signal_handlers()) ::_exit(80);
     auto motor = PwmMotor::open(config_for(tree));
     if (!motor) ::_exit(81);
     motor.value().command({0.3, true});
     ::raise(SIGINT);
     motor.value().command({0.3, true});  // the loop's next tick, before it sees the stop request
-    const char byte = lever::platform::stop_signal_received() == SIGINT ? 'y' : 'n';
+    const char byte = lever::board::stop_signal_received() == SIGINT ? 'y' : 'n';
     if (::write(ready[1], &byte, 1) != 1) ::_exit(82);
     char ignored = 0;
     if (::read(done[0], &ignored, 1) != 1) ::_exit(83);

@@ -13,18 +13,18 @@
 #include <vector>
 
 #include "fork_child.hpp"
+#include "lever/board/latency_histogram.hpp"
+#include "lever/board/period_tracker.hpp"
+#include "lever/board/realtime_loop.hpp"
 #include "lever/fw/step_timing.hpp"
-#include "lever/platform/latency_histogram.hpp"
-#include "lever/platform/period_tracker.hpp"
-#include "lever/platform/realtime_loop.hpp"
 #include "skip.hpp"
 
+using lever::board::LatencyHistogram;
+using lever::board::LoopStats;
+using lever::board::PeriodTracker;
+using lever::board::RealtimeConfig;
+using lever::board::RealtimeLoop;
 using lever::fw::Tick;
-using lever::platform::LatencyHistogram;
-using lever::platform::LoopStats;
-using lever::platform::PeriodTracker;
-using lever::platform::RealtimeConfig;
-using lever::platform::RealtimeLoop;
 
 namespace {
 
@@ -176,12 +176,12 @@ TEST_CASE("RealtimeConfig: problems name their field; CPU lists parse as taskset
   CHECK(refused.error().message.find("real-time config: period:") == 0);
 
   using V = std::vector<unsigned>;
-  CHECK(lever::platform::parse_cpu_list("2") == V{2});
-  CHECK(lever::platform::parse_cpu_list("0,2-4") == V{0, 2, 3, 4});
-  CHECK_FALSE(lever::platform::parse_cpu_list(""));
-  CHECK_FALSE(lever::platform::parse_cpu_list("1,"));
-  CHECK_FALSE(lever::platform::parse_cpu_list("3-1"));
-  CHECK_FALSE(lever::platform::parse_cpu_list("a"));
+  CHECK(lever::board::parse_cpu_list("2") == V{2});
+  CHECK(lever::board::parse_cpu_list("0,2-4") == V{0, 2, 3, 4});
+  CHECK_FALSE(lever::board::parse_cpu_list(""));
+  CHECK_FALSE(lever::board::parse_cpu_list("1,"));
+  CHECK_FALSE(lever::board::parse_cpu_list("3-1"));
+  CHECK_FALSE(lever::board::parse_cpu_list("a"));
 }
 
 TEST_CASE("RealtimeLoop: run serves increasing ticks from 1 until stopped, and counts what it served", "[loop]") {

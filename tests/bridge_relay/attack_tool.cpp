@@ -15,7 +15,7 @@
 
 #include "datagram.hpp"
 #include "key.hpp"
-#include "lever/platform/udp_socket.hpp"
+#include "lever/board/udp_socket.hpp"
 
 namespace {
 
@@ -37,7 +37,7 @@ enum class Attack {
 
 // The bridge's epoch, learned as a peer learns it: a probe request from our address, whose reply carries it (a
 // bridge answers probes that do not echo its epoch; that is how a restarted peer catches up). 0 when no reply came.
-std::uint64_t learn_epoch(platform::UdpSocket& socket, const platform::SocketAddress& bridge, const Key& key,
+std::uint64_t learn_epoch(board::UdpSocket& socket, const board::SocketAddress& bridge, const Key& key,
                           std::uint8_t sender, std::uint64_t sequence, std::uint64_t own_epoch) {
   Datagram probe;
   probe.kind = Kind::probe_request;
@@ -47,14 +47,14 @@ std::uint64_t learn_epoch(platform::UdpSocket& socket, const platform::SocketAdd
   probe.epoch = own_epoch;
   std::array<std::uint8_t, kMaxDatagramSize + 1> buffer{};
   const auto encoded = encode(probe, key, buffer);
-  if (!encoded || socket.send_to(std::span(buffer.data(), encoded.size), bridge) != platform::UdpStatus::ok) return 0;
+  if (!encoded || socket.send_to(std::span(buffer.data(), encoded.size), bridge) != board::UdpStatus::ok) return 0;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
   while (std::chrono::steady_clock::now() < deadline) {
     pollfd fd{socket.fd(), POLLIN, 0};
     if (::poll(&fd, 1, 100) <= 0) continue;
     std::size_t size = 0;
-    platform::SocketAddress from;
-    if (socket.receive(buffer, size, from) != platform::UdpStatus::ok || !(from == bridge)) continue;
+    board::SocketAddress from;
+    if (socket.receive(buffer, size, from) != board::UdpStatus::ok || !(from == bridge)) continue;
     Datagram reply;
     if (size <= kMaxDatagramSize && decode(std::span(buffer.data(), size), key, reply) == WireError::none &&
         reply.peer_epoch == own_epoch) {
@@ -67,16 +67,16 @@ std::uint64_t learn_epoch(platform::UdpSocket& socket, const platform::SocketAdd
 // proxy: a bridge A sends to `listen`, and we pass it on to the bridge B at `to` from `from` (B's configured peer);
 // B's datagrams to `from` go back to A at `back` from `listen`. What A sends B is appended to `capture` as records
 // of a 2-byte big-endian length and the datagram.
-int run_proxy(platform::UdpSocket& b_side, const platform::SocketAddress& b, const std::string& listen,
+int run_proxy(board::UdpSocket& b_side, const board::SocketAddress& b, const std::string& listen,
               const std::string& back, const std::string& capture, double duration_s) {
   std::string error;
-  const auto listen_address = platform::parse_socket_address(listen, error);
-  const auto a = platform::parse_socket_address(back, error);
+  const auto listen_address = board::parse_socket_address(listen, error);
+  const auto a = board::parse_socket_address(back, error);
   if (!listen_address || !a) {
     fmt::print(stderr, "lever-bridge-attack: proxy needs --listen and --back: {}\n", error);
     return 2;
   }
-  auto opened = platform::UdpSocket::open(*listen_address);
+  auto opened = board::UdpSocket::open(*listen_address);
   if (!opened) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", opened.error().message);
     return 1;
@@ -94,8 +94,8 @@ int run_proxy(platform::UdpSocket& b_side, const platform::SocketAddress& b, con
     pollfd fds[2] = {{a_side.fd(), POLLIN, 0}, {b_side.fd(), POLLIN, 0}};
     if (::poll(fds, 2, 50) <= 0) continue;
     std::size_t size = 0;
-    platform::SocketAddress from;
-    if ((fds[0].revents & POLLIN) && a_side.receive(buffer, size, from) == platform::UdpStatus::ok &&
+    board::SocketAddress from;
+    if ((fds[0].revents & POLLIN) && a_side.receive(buffer, size, from) == board::UdpStatus::ok &&
         size <= buffer.size()) {
       b_side.send_to(std::span(buffer.data(), size), b);
       ++forwarded;
@@ -107,7 +107,7 @@ int run_proxy(platform::UdpSocket& b_side, const platform::SocketAddress& b, con
         ++captured;
       }
     }
-    if ((fds[1].revents & POLLIN) && b_side.receive(buffer, size, from) == platform::UdpStatus::ok &&
+    if ((fds[1].revents & POLLIN) && b_side.receive(buffer, size, from) == board::UdpStatus::ok &&
         size <= buffer.size()) {
       a_side.send_to(std::span(buffer.data(), size), *a);
       ++forwarded;
@@ -118,7 +118,7 @@ int run_proxy(platform::UdpSocket& b_side, const platform::SocketAddress& b, con
   return 0;
 }
 
-int replay_capture(platform::UdpSocket& socket, const platform::SocketAddress& to, const std::string& capture) {
+int replay_capture(board::UdpSocket& socket, const board::SocketAddress& to, const std::string& capture) {
   std::FILE* file = std::fopen(capture.c_str(), "rb");
   if (!file) {
     fmt::print(stderr, "lever-bridge-attack: cannot read {}\n", capture);
@@ -130,7 +130,7 @@ int replay_capture(platform::UdpSocket& socket, const platform::SocketAddress& t
   while (std::fread(length, 1, 2, file) == 2) {
     const std::size_t size = static_cast<std::size_t>(length[0] << 8 | length[1]);
     if (size > buffer.size() || std::fread(buffer.data(), 1, size, file) != size) break;
-    if (socket.send_to(std::span(buffer.data(), size), to) == platform::UdpStatus::ok) ++sent;
+    if (socket.send_to(std::span(buffer.data(), size), to) == board::UdpStatus::ok) ++sent;
     ::usleep(1000);
   }
   std::fclose(file);
@@ -176,13 +176,13 @@ int main(int argc, char** argv) {
   if (sodium_init() < 0) return 1;
 
   std::string error;
-  const auto local = platform::parse_socket_address(from, error);
-  const auto remote = platform::parse_socket_address(to, error);
+  const auto local = board::parse_socket_address(from, error);
+  const auto remote = board::parse_socket_address(to, error);
   if (!local || !remote) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", error);
     return 2;
   }
-  auto opened = platform::UdpSocket::open(*local);
+  auto opened = board::UdpSocket::open(*local);
   if (!opened) {
     fmt::print(stderr, "lever-bridge-attack: {}\n", opened.error().message);
     return 1;
@@ -242,7 +242,7 @@ int main(int argc, char** argv) {
       default:
         break;
     }
-    if (socket.send_to(std::span(buffer.data(), size), *remote) == platform::UdpStatus::ok) ++sent;
+    if (socket.send_to(std::span(buffer.data(), size), *remote) == board::UdpStatus::ok) ++sent;
     ::usleep(1000);  // a 1 kHz stream, and no pressure on the receive buffer
   }
   fmt::print("{} {} datagrams sent\n", sent, app.get_option("--kind")->as<std::string>());

@@ -7,10 +7,10 @@
 #include <cerrno>
 #include <cstring>
 
-#include "lever/platform/udp_socket.hpp"
+#include "lever/board/udp_socket.hpp"
 #include "skip.hpp"
 
-using namespace lever::platform;
+using namespace lever::board;
 
 namespace {
 

@@ -1,5 +1,5 @@
 // The HIL's encoder lines and motor readback on a real kernel GPIO stack: gpio-sim chips in the kernel rig's
-// guest, read and driven by platform's own GpioEncoder and PwmMotor. Run by tests/kernel/hil_devices.sh, which
+// guest, read and driven by the board layer's own GpioEncoder and PwmMotor. Run by tests/kernel/hil_devices.sh, which
 // makes two chips and sets LEVER_ENC_CHIP (lines 0 "enc-a", 1 "enc-b", 2 "enc-z") and LEVER_MOT_CHIP (lines
 // 0 "mot-en", 1 "mot-dir", 2 "mot-fault"), each the chip's label. The guest's clock is emulated and slow: the
 // tests assert what arrives, never how fast, and wait generously.
@@ -19,23 +19,23 @@
 #include <thread>
 #include <vector>
 
+#include "lever/board/gpio_encoder.hpp"
+#include "lever/board/pwm_motor.hpp"
 #include "lever/hil/devices/encoder_lines.hpp"
 #include "lever/hil/devices/motor_readback.hpp"
-#include "lever/platform/gpio_encoder.hpp"
-#include "lever/platform/pwm_motor.hpp"
 
+using lever::board::GpioEncoder;
+using lever::board::GpioEncoderConfig;
+using lever::board::LineRef;
+using lever::board::MotorLineConfig;
+using lever::board::PwmMotor;
+using lever::board::PwmMotorConfig;
 using lever::fw::AbState;
 using lever::fw::EncoderEdge;
 using lever::hil::devices::EncoderLines;
 using lever::hil::devices::EncoderLinesOptions;
 using lever::hil::devices::MotorReadback;
 using lever::hil::devices::ReleasedLines;
-using lever::platform::GpioEncoder;
-using lever::platform::GpioEncoderConfig;
-using lever::platform::LineRef;
-using lever::platform::MotorLineConfig;
-using lever::platform::PwmMotor;
-using lever::platform::PwmMotorConfig;
 
 namespace {
 
@@ -46,7 +46,7 @@ std::string env(const char* name) {
 }
 
 template <typename T>
-T opened(lever::platform::Result<T> result) {
+T opened(lever::board::Result<T> result) {
   if (!result) FAIL(result.error().message);
   return std::move(result).value();
 }

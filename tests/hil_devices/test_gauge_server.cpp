@@ -1,4 +1,4 @@
-// GaugeServer with the board's own client, platform::ModbusGauge, from the same config: over TCP loopback and
+// GaugeServer with the board's own client, board::ModbusGauge, from the same config: over TCP loopback and
 // over its RTU pty (through the symlink at rtu.device), every register type in both word orders.
 #include <sys/stat.h>
 #include <unistd.h>
@@ -12,16 +12,16 @@
 
 #include "gauge_test_support.hpp"
 #include "gauge_type_cases.hpp"
+#include "lever/board/modbus_gauge.hpp"
 #include "lever/hil/devices/gauge_server.hpp"
-#include "lever/platform/modbus_gauge.hpp"
 
+using lever::board::GaugeRegisterMap;
+using lever::board::ModbusGauge;
+using lever::board::ModbusGaugeConfig;
+using lever::board::ModbusRtuEndpoint;
+using lever::board::ModbusTcpEndpoint;
+using lever::board::RegisterFunction;
 using lever::hil::devices::GaugeServer;
-using lever::platform::GaugeRegisterMap;
-using lever::platform::ModbusGauge;
-using lever::platform::ModbusGaugeConfig;
-using lever::platform::ModbusRtuEndpoint;
-using lever::platform::ModbusTcpEndpoint;
-using lever::platform::RegisterFunction;
 using lever::test::eventually;
 using lever::test::kTypeCases;
 
@@ -62,7 +62,7 @@ ModbusGauge open_gauge(const ModbusGaugeConfig& config) {
 }
 
 // The config both sides read; for TCP the client's is the server's with the port it got.
-ModbusGaugeConfig config_for(lever::platform::ModbusTransport transport, GaugeRegisterMap map = {}) {
+ModbusGaugeConfig config_for(lever::board::ModbusTransport transport, GaugeRegisterMap map = {}) {
   map.scale = kScale;
   map.offset = kOffset;
   return lever::test::test_config(std::move(transport), map);
@@ -81,7 +81,7 @@ bool reads_near(const ModbusGauge& gauge, double newtons) {
 // The force the world sets for a raw value, off the integer grid by a fraction of a unit.
 double force_for(double raw) { return raw * kScale + kOffset + 0.3 * kScale; }
 
-void check_every_type(const lever::platform::ModbusTransport& transport) {
+void check_every_type(const lever::board::ModbusTransport& transport) {
   for (const auto& type_case : kTypeCases) {
     for (const RegisterFunction function : {RegisterFunction::holding, RegisterFunction::input}) {
       CAPTURE(static_cast<int>(type_case.type), static_cast<int>(type_case.order), static_cast<int>(function));

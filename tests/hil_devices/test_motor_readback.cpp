@@ -1,4 +1,4 @@
-// MotorReadback with the board's own PWM motor (platform::PwmMotor, same config) writing the tree it makes: no
+// MotorReadback with the board's own PWM motor (board::PwmMotor, same config) writing the tree it makes: no
 // GPIO lines, so no gpio-sim; the lines are tested in the guest (test_devices_gpio_sim.cpp).
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -7,12 +7,12 @@
 #include <fstream>
 #include <string>
 
+#include "lever/board/pwm_motor.hpp"
 #include "lever/hil/devices/motor_readback.hpp"
-#include "lever/platform/pwm_motor.hpp"
 
+using lever::board::PwmMotor;
+using lever::board::PwmMotorConfig;
 using lever::hil::devices::MotorReadback;
-using lever::platform::PwmMotor;
-using lever::platform::PwmMotorConfig;
 
 namespace {
 
@@ -52,7 +52,7 @@ PwmMotorConfig config_in(const std::string& root) {
 constexpr double kFullDutyNm = 0.04 * 10.0 * 3.0;
 
 template <typename T>
-T opened(lever::platform::Result<T> result) {
+T opened(lever::board::Result<T> result) {
   if (!result) FAIL(result.error().message);
   return std::move(result).value();
 }
@@ -159,7 +159,7 @@ TEST_CASE("the readback refuses the real sysfs and a tree it cannot trust") {
 TEST_CASE("lines on a chip that is not there: an error naming the field") {
   TempDir dir;
   PwmMotorConfig config = config_in(dir.path());
-  config.fault_line = lever::platform::MotorLineConfig{"no-such-chip", lever::platform::LineRef::name("f"), false};
+  config.fault_line = lever::board::MotorLineConfig{"no-such-chip", lever::board::LineRef::name("f"), false};
   const auto refused = MotorReadback::open(config);
   REQUIRE_FALSE(refused.ok());
   CHECK(refused.error().message.find("motor readback: fault_line: cannot open chip \"no-such-chip\"") == 0);

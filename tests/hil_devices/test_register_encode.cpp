@@ -1,4 +1,4 @@
-// encode_registers() against platform's decode_registers(): for every type and word order, the value decoded
+// encode_registers() against the board layer's decode_registers(): for every type and word order, the value decoded
 // from the registers is the raw value asked for, rounded and clamped as the type requires.
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -7,20 +7,20 @@
 #include <span>
 #include <vector>
 
+#include "lever/board/modbus_register_decode.hpp"
 #include "lever/hil/devices/register_encode.hpp"
-#include "lever/platform/modbus_register_decode.hpp"
 
+using lever::board::RegisterType;
+using lever::board::WordOrder;
 using lever::hil::devices::encode_registers;
 using lever::hil::devices::raw_for_newtons;
-using lever::platform::RegisterType;
-using lever::platform::WordOrder;
 
 namespace {
 
 std::optional<double> round_trip(double raw, RegisterType type, WordOrder order) {
   const auto encoded = encode_registers(raw, type, order);
-  REQUIRE(encoded.count == lever::platform::register_count(type));
-  return lever::platform::decode_registers(
+  REQUIRE(encoded.count == lever::board::register_count(type));
+  return lever::board::decode_registers(
       std::span<const std::uint16_t>(encoded.words.data(), static_cast<std::size_t>(encoded.count)), type, order);
 }
 
@@ -81,7 +81,7 @@ TEST_CASE("the word order puts the high word where the decoder looks for it") {
 }
 
 TEST_CASE("raw_for_newtons inverts newtons = raw * scale + offset") {
-  lever::platform::GaugeRegisterMap map;
+  lever::board::GaugeRegisterMap map;
   map.scale = 9.80665e-3;
   map.offset = -2.5;
   for (const double raw : {0.0, 1.0, -250.0, 12345.0}) {

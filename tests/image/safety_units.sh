@@ -4,7 +4,7 @@
 # controller's own stamps (fault_timing_lib.sh), against a bound from the unit and the configuration:
 #   0. a process spinning at the loops' SCHED_FIFO priority for 100 ms on the board's one CPU: neither loop nor
 #      PID 1 runs; each lever's motor guard, one priority above, stops its motor within its deadline + its check
-#      + 1 ms (platform/motor_guard.hpp);
+#      + 1 ms (board/motor_guard.hpp);
 #   1. the TOP's loop hung (SIGSTOP): its motor guard stops the motor within the same bound; later systemd's
 #      WatchdogSec fires (SIGABRT, then SIGCONT) and Restart=on-failure brings the lever back disarmed and unhomed;
 #   2. the TOP killed (SIGKILL): its motor guard sees its pidfd and stops the motor within 0.4 ms of the process's
@@ -55,7 +55,7 @@ watchdog_ms=$(timespan_ms "$(unit_value top WatchdogUSec)")
 restart_s=$(($(timespan_ms "$(unit_value top RestartUSec)" | cut -d. -f1) / 1000))
 echo "from the unit: WatchdogSec $watchdog_ms ms, RestartSec $restart_s s, StartLimitBurst $(unit_value top StartLimitBurst)"
 mono_offset
-# The motor guard's figures (platform/motor_guard.hpp's defaults, lever-fw's log line says them)
+# The motor guard's figures (board/motor_guard.hpp's defaults, lever-fw's log line says them)
 guard_deadline_ms=10 guard_check_ms=2
 guard_ms=$((guard_deadline_ms + guard_check_ms + 1))
 check "the TOP's guard runs with them: $(journalctl -u lever-fw@top -o cat | grep -m1 'motor guard pid')" \

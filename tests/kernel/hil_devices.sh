@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs inside the kernel rig with gpio-sim (tools/kernel-rig/run-in-guest --gpio-sim): the HIL's simulated
-# encoder lines and motor readback (hil/devices) against platform's GpioEncoder and PwmMotor on two simulated
+# encoder lines and motor readback (hil/devices) against the board layer's GpioEncoder and PwmMotor on two simulated
 # chips; gpioinfo, libgpiod's own tool, checks each chip.
 # usage: hil_devices.sh BIN_DIR
 set -uo pipefail

@@ -69,7 +69,7 @@ check "TOP stopped for $(ms_since 0 "$stopped_us") ms: no TIMING, the TOP stays 
 # Above it: TIMING at the first step, and the motor off. A lever moving while its process is stopped may also
 # overflow the kernel's 16-event FIFO of an encoder line (the v1 GPIO interface's, fixed): its count is lost, it
 # latches ENCODER as well, and only homing again makes it whole. A stop longer than the motor guard's deadline is cut
-# by the guard first (platform/motor_guard.hpp: no step for guard_deadline_ms, found at its next check, every
+# by the guard first (board/motor_guard.hpp: no step for guard_deadline_ms, found at its next check, every
 # guard_check_ms; then a wake at SCHED_FIFO above every other thread and three writes, within 1 ms): the bound is
 # the sooner of the two.
 guard_deadline_ms=10 guard_check_ms=2

@@ -12,17 +12,17 @@
 #include "lever/app/gauge_port.hpp"
 #include "lever/app/motor_state.hpp"
 #include "lever/app/stats_line.hpp"
+#include "lever/board/board_can_port.hpp"
+#include "lever/board/gpio_encoder.hpp"
+#include "lever/board/kernel_preemption.hpp"
+#include "lever/board/latest_value.hpp"
+#include "lever/board/loop_watchdog.hpp"
+#include "lever/board/modbus_gauge.hpp"
+#include "lever/board/motor_guard.hpp"
+#include "lever/board/motor_stop_signals.hpp"
+#include "lever/board/pwm_motor.hpp"
+#include "lever/board/realtime_loop.hpp"
 #include "lever/fw/lever.hpp"
-#include "lever/platform/board_can_port.hpp"
-#include "lever/platform/gpio_encoder.hpp"
-#include "lever/platform/kernel_preemption.hpp"
-#include "lever/platform/latest_value.hpp"
-#include "lever/platform/loop_watchdog.hpp"
-#include "lever/platform/modbus_gauge.hpp"
-#include "lever/platform/motor_guard.hpp"
-#include "lever/platform/motor_stop_signals.hpp"
-#include "lever/platform/pwm_motor.hpp"
-#include "lever/platform/realtime_loop.hpp"
 #include "lever/program/text.hpp"
 
 namespace lever::app {
@@ -30,8 +30,8 @@ namespace {
 
 constexpr int kRuntimeFailure = 1;
 
-struct BoardHal : fw::Ports<platform::GpioEncoder, GaugePort, platform::PwmMotor, platform::BoardCanPort> {
-  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(platform::monotonic_ns()); }
+struct BoardHal : fw::Ports<board::GpioEncoder, GaugePort, board::PwmMotor, board::BoardCanPort> {
+  std::uint64_t monotonic_ns() const { return static_cast<std::uint64_t>(board::monotonic_ns()); }
 };
 static_assert(fw::LeverHal<BoardHal>);
 static_assert(fw::HasStepClock<BoardHal>);
@@ -49,7 +49,7 @@ long thread_minor_faults() noexcept {
 }
 
 template <typename T>
-std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
+std::optional<T> opened(board::Result<T>&& r, std::string_view what) {
   if (!r) {
     fmt::print(stderr, "lever-fw: cannot open the {}: {}\n", what, program::printable(r.error().message, 400));
     return std::nullopt;
@@ -58,12 +58,12 @@ std::optional<T> opened(platform::Result<T>&& r, std::string_view what) {
 }
 
 template <typename Role>
-int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::ModbusGauge>& gauge,
-              platform::MotorGuard& guard, bool json_lines, const std::atomic<bool>& stop_flag) {
+int run_lever(const FwConfig& config, BoardHal& hal, std::optional<board::ModbusGauge>& gauge, board::MotorGuard& guard,
+              bool json_lines, const std::atomic<bool>& stop_flag) {
   // The watchdog's thread and the printer start before the loop raises this thread to SCHED_FIFO with
   // SCHED_RESET_ON_FORK: started after, they would run SCHED_OTHER; started now they keep the service's own
   // scheduling (FIFO 50 in lever-fw@.service), below the loop, ahead of ordinary load.
-  auto watchdog = platform::LoopWatchdog::open(watchdog_config(config.board));
+  auto watchdog = board::LoopWatchdog::open(watchdog_config(config.board));
   if (!watchdog) {
     fmt::print(stderr, "lever-fw: {}\n", program::printable(watchdog.error().message, 400));
     return kRuntimeFailure;
@@ -72,8 +72,8 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
 
   // The loop publishes a snapshot every 100 ms; this thread prints one a second, so the loop never formats,
   // allocates or writes to a pipe that might block.
-  platform::LatestValue<Snapshot> latest;
-  platform::LatestValue<LoopSample> loop_sample;
+  board::LatestValue<Snapshot> latest;
+  board::LatestValue<LoopSample> loop_sample;
   std::jthread printer([&](std::stop_token token) {
     while (!token.stop_requested()) {
       for (int i = 0; i < 10 && !token.stop_requested(); ++i)
@@ -114,11 +114,11 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   // Under the unit /proc/cmdline is hidden (ProcSubset=pid) and the model may be unknown: its ExecStartPre says it
   // then, unsandboxed (--kernel-check). Only a model known to be voluntary is worth a word here.
   if (config.board.realtime_priority > 0) {
-    const auto sources = platform::read_kernel_preemption_sources();
-    if (platform::preemption_of(sources) == platform::Preemption::voluntary)
-      fmt::print(stderr, "lever-fw: {}\n", platform::describe(sources));
+    const auto sources = board::read_kernel_preemption_sources();
+    if (board::preemption_of(sources) == board::Preemption::voluntary)
+      fmt::print(stderr, "lever-fw: {}\n", board::describe(sources));
   }
-  auto loop_result = platform::RealtimeLoop::open(realtime_config(config.board));
+  auto loop_result = board::RealtimeLoop::open(realtime_config(config.board));
   if (!loop_result) {
     fmt::print(stderr, "lever-fw: cannot set up the real-time loop: {}\n", loop_result.error().message);
     return kRuntimeFailure;
@@ -131,15 +131,15 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   long faults_at_start = -1;
   loop.run(
       [&](fw::Tick now) {
-        if (stop_flag.load(std::memory_order_relaxed) || platform::stop_signal_received() != 0 ||
-            platform::MotorGuard::lost()) {
+        if (stop_flag.load(std::memory_order_relaxed) || board::stop_signal_received() != 0 ||
+            board::MotorGuard::lost()) {
           stop.request_stop();
         }
         // The guard stopped the motor while this loop did not step: the hardware no longer holds what the motor
         // last wrote (the step itself finds the gap and latches TIMING).
         if (guard.take_trip()) hal.motor_.note_external_stop();
         hal.force_.now_tick = now;
-        hal.force_.now_ns = platform::monotonic_ns();
+        hal.force_.now_ns = board::monotonic_ns();
         lever.step(now);
         watchdog.value().advanced(now);  // after the step: only a step that ended feeds the watchdogs
         guard.stepped(hal.force_.now_ns);
@@ -160,7 +160,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<platform::Mod
   printer.request_stop();
   hal.motor_.command({0.0, false});  // the safe state before the objects go (their destructors stop it again)
   watchdog.value().stop();
-  if (platform::MotorGuard::lost()) {
+  if (board::MotorGuard::lost()) {
     // Restarted by the service manager (exit 1), the lever comes back with a guard of its own.
     fmt::print(stderr, "lever-fw: the motor guard (pid {}) ended: motor stopped; exit 1\n", guard.pid());
     return kRuntimeFailure;
@@ -180,30 +180,30 @@ int run_board(const FwConfig& config, bool json_lines, const std::string& motor_
     }
   }
   // The motor first, and its guard with it: from here on, whatever happens to this process stops the motor.
-  auto motor = opened(platform::PwmMotor::open(motor_config(config.board)), "motor");
+  auto motor = opened(board::PwmMotor::open(motor_config(config.board)), "motor");
   if (!motor) return kRuntimeFailure;
-  if (auto installed = platform::install_motor_stop_signal_handlers(); !installed) {
+  if (auto installed = board::install_motor_stop_signal_handlers(); !installed) {
     fmt::print(stderr, "lever-fw: cannot install the signal handlers: {}\n", installed.error().message);
     return kRuntimeFailure;
   }
-  platform::MotorGuardConfig guard_config;
+  board::MotorGuardConfig guard_config;
   // One above the loop: a loop spinning at its own priority on a single CPU cannot starve its guard.
   if (config.board.realtime_priority > 0) {
     guard_config.fifo_priority = static_cast<int>(std::min<std::int64_t>(config.board.realtime_priority + 1, 99));
   }
-  auto guard = opened(platform::MotorGuard::start(guard_config, motor->guard_handles()), "motor guard");
+  auto guard = opened(board::MotorGuard::start(guard_config, motor->guard_handles()), "motor guard");
   if (!guard) return kRuntimeFailure;
   fmt::print(stderr, "lever-fw: {}\n", guard->description());
-  auto encoder = opened(platform::GpioEncoder::open(encoder_config(config.board)), "encoder");
+  auto encoder = opened(board::GpioEncoder::open(encoder_config(config.board)), "encoder");
   if (!encoder) return kRuntimeFailure;
-  std::optional<platform::ModbusGauge> gauge;
+  std::optional<board::ModbusGauge> gauge;
   const bool uses_gauge =
       config.lever.role == protocol::Role::top || (config.lever.use_force_sensor && config.lever.display.closed_loop);
   if (uses_gauge) {
-    gauge = opened(platform::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
+    gauge = opened(board::ModbusGauge::open(gauge_config(config.board)), "strain gauge");
     if (!gauge) return kRuntimeFailure;
   }
-  auto can = opened(platform::BoardCanPort::open(can_config(config)), "CAN port");
+  auto can = opened(board::BoardCanPort::open(can_config(config)), "CAN port");
   if (!can) return kRuntimeFailure;
   BoardHal hal{{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)}};
   fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",

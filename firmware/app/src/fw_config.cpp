@@ -34,47 +34,47 @@ void bind_codec(program::ConfigSchema& s, const std::string& section, codec::Con
 
 }  // namespace
 
-const platform::ModbusGaugeConfig& default_gauge() {
-  static const platform::ModbusGaugeConfig gauge = platform::preset_gross_weight_int32(platform::ModbusTcpEndpoint{});
+const board::ModbusGaugeConfig& default_gauge() {
+  static const board::ModbusGaugeConfig gauge = board::preset_gross_weight_int32(board::ModbusTcpEndpoint{});
   return gauge;
 }
 
 fw::LeverConfig board_lever_defaults() {
   fw::LeverConfig c;
   c.gauge.newton_per_count = 1.0;
-  c.gauge.raw_min = -platform::kTestbedLoadCellCapacityN;
-  c.gauge.raw_max = platform::kTestbedLoadCellCapacityN;
+  c.gauge.raw_min = -board::kTestbedLoadCellCapacityN;
+  c.gauge.raw_max = board::kTestbedLoadCellCapacityN;
   // The core's 5 ms suits an amplifier that pushes 600 samples a second; polled over Modbus, a reading may be
   // as old as the longest gap with one missed poll (5 + 3 x 10 ms), and one missed poll must not latch
   // FORCE_STALE.
-  const auto gap = platform::longest_gap(default_gauge(), kMissedPollsTolerated);
+  const auto gap = board::longest_gap(default_gauge(), kMissedPollsTolerated);
   c.gauge.stale_after = static_cast<fw::Tick>((gap.count() + 999) / 1000 + 1);
   return c;
 }
 
-platform::GpioEncoderConfig encoder_config(const BoardConfig& b) {
-  platform::GpioEncoderConfig c;
+board::GpioEncoderConfig encoder_config(const BoardConfig& b) {
+  board::GpioEncoderConfig c;
   c.chip = b.encoder_chip;
-  c.line_a = platform::LineRef::parse(b.encoder_line_a);
-  c.line_b = platform::LineRef::parse(b.encoder_line_b);
-  if (!b.encoder_line_z.empty()) c.line_z = platform::LineRef::parse(b.encoder_line_z);
+  c.line_a = board::LineRef::parse(b.encoder_line_a);
+  c.line_b = board::LineRef::parse(b.encoder_line_b);
+  if (!b.encoder_line_z.empty()) c.line_z = board::LineRef::parse(b.encoder_line_z);
   c.active_low = b.encoder_active_low;
   c.edge_latency_us = static_cast<std::uint32_t>(b.encoder_edge_latency_us);
   return c;
 }
 
-platform::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
-  platform::ModbusGaugeConfig c;
+board::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
+  board::ModbusGaugeConfig c;
   if (b.gauge_transport == "rtu") {
-    c.transport = platform::ModbusRtuEndpoint{b.gauge_device,
-                                              static_cast<int>(b.gauge_baud),
-                                              b.gauge_parity,
-                                              8,
-                                              static_cast<int>(b.gauge_stop_bits),
-                                              static_cast<int>(b.gauge_slave_id)};
+    c.transport = board::ModbusRtuEndpoint{b.gauge_device,
+                                           static_cast<int>(b.gauge_baud),
+                                           b.gauge_parity,
+                                           8,
+                                           static_cast<int>(b.gauge_stop_bits),
+                                           static_cast<int>(b.gauge_slave_id)};
   } else {
     c.transport =
-        platform::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port), static_cast<int>(b.gauge_unit_id)};
+        board::ModbusTcpEndpoint{b.gauge_host, static_cast<int>(b.gauge_port), static_cast<int>(b.gauge_unit_id)};
   }
   c.registers = b.gauge_registers;
   c.registers.saturation_raw_min = b.gauge_saturation_raw_min;
@@ -86,8 +86,8 @@ platform::ModbusGaugeConfig gauge_config(const BoardConfig& b) {
   return c;
 }
 
-platform::PwmMotorConfig motor_config(const BoardConfig& b) {
-  platform::PwmMotorConfig c;
+board::PwmMotorConfig motor_config(const BoardConfig& b) {
+  board::PwmMotorConfig c;
   c.sysfs_root = b.motor_sysfs_root;
   c.pwm_chip = static_cast<unsigned>(b.motor_pwm_chip);
   c.pwm_channel = static_cast<unsigned>(b.motor_pwm_channel);
@@ -98,9 +98,9 @@ platform::PwmMotorConfig motor_config(const BoardConfig& b) {
   c.full_scale_current_a = b.motor_full_scale_current_a;
   c.max_duty = b.motor_max_duty;
   c.deadband_nm = b.motor_deadband_nm;
-  auto line = [&](const std::string& name) -> std::optional<platform::MotorLineConfig> {
+  auto line = [&](const std::string& name) -> std::optional<board::MotorLineConfig> {
     if (name.empty()) return std::nullopt;
-    return platform::MotorLineConfig{b.motor_line_chip, platform::LineRef::parse(name), b.motor_lines_active_low};
+    return board::MotorLineConfig{b.motor_line_chip, board::LineRef::parse(name), b.motor_lines_active_low};
   };
   c.enable_line = line(b.motor_enable_line);
   c.direction_line = line(b.motor_direction_line);
@@ -109,21 +109,21 @@ platform::PwmMotorConfig motor_config(const BoardConfig& b) {
   return c;
 }
 
-platform::RealtimeConfig realtime_config(const BoardConfig& b) {
-  platform::RealtimeConfig c;
+board::RealtimeConfig realtime_config(const BoardConfig& b) {
+  board::RealtimeConfig c;
   c.fifo_priority = static_cast<int>(b.realtime_priority);
-  if (!b.realtime_cpus.empty()) c.cpus = platform::parse_cpu_list(b.realtime_cpus).value_or(std::vector<unsigned>{});
+  if (!b.realtime_cpus.empty()) c.cpus = board::parse_cpu_list(b.realtime_cpus).value_or(std::vector<unsigned>{});
   c.lock_memory = b.realtime_lock_memory;
   c.prefault_stack_bytes = static_cast<std::size_t>(b.realtime_prefault_stack_kib) * 1024;
   return c;
 }
 
-platform::LoopWatchdogConfig watchdog_config(const BoardConfig& b) {
+board::LoopWatchdogConfig watchdog_config(const BoardConfig& b) {
   return {b.watchdog_device, std::chrono::seconds(b.watchdog_timeout_s)};
 }
 
-platform::BoardCanPortConfig can_config(const FwConfig& config) {
-  platform::BoardCanPortConfig c;
+board::BoardCanPortConfig can_config(const FwConfig& config) {
+  board::BoardCanPortConfig c;
   c.interface = config.board.can_interface;
   c.pair = config.lever.pair;
   c.link_retry_ms = static_cast<std::uint32_t>(config.board.can_link_retry_ms);
@@ -287,24 +287,23 @@ program::ConfigSchema schema_for(FwConfig& config) {
   s.text("board.gauge.device", b.gauge_device, "rtu: serial device");
   s.integer("board.gauge.baud", b.gauge_baud, 1200, 921600, "baud", "rtu: a standard rate");
   s.choice("board.gauge.parity", b.gauge_parity,
-           {{"none", platform::Parity::none}, {"even", platform::Parity::even}, {"odd", platform::Parity::odd}},
-           "rtu: parity");
+           {{"none", board::Parity::none}, {"even", board::Parity::even}, {"odd", board::Parity::odd}}, "rtu: parity");
   s.integer("board.gauge.stop_bits", b.gauge_stop_bits, 1, 2, "", "rtu: stop bits");
   s.integer("board.gauge.slave_id", b.gauge_slave_id, 1, 247, "", "rtu: slave id");
   auto& r = b.gauge_registers;
   s.choice("board.gauge.function", r.function,
-           {{"holding", platform::RegisterFunction::holding}, {"input", platform::RegisterFunction::input}},
+           {{"holding", board::RegisterFunction::holding}, {"input", board::RegisterFunction::input}},
            "register table (function code 3 or 4)");
   s.integer("board.gauge.address", r.address, 0, 65535, "", "first register, 0-based (a manual's 40001 is 0)");
   s.choice("board.gauge.type", r.type,
-           {{"int16", platform::RegisterType::int16},
-            {"uint16", platform::RegisterType::uint16},
-            {"int32", platform::RegisterType::int32},
-            {"uint32", platform::RegisterType::uint32},
-            {"float32", platform::RegisterType::float32}},
+           {{"int16", board::RegisterType::int16},
+            {"uint16", board::RegisterType::uint16},
+            {"int32", board::RegisterType::int32},
+            {"uint32", board::RegisterType::uint32},
+            {"float32", board::RegisterType::float32}},
            "register type");
   s.choice("board.gauge.word_order", r.word_order,
-           {{"high_first", platform::WordOrder::high_first}, {"low_first", platform::WordOrder::low_first}},
+           {{"high_first", board::WordOrder::high_first}, {"low_first", board::WordOrder::low_first}},
            "32-bit types: which word the lower address holds");
   s.number("board.gauge.scale", r.scale, -1e12, 1e12, "N", "newtons per raw unit (not 0)");
   s.number("board.gauge.offset", r.offset, -1e12, 1e12, "N", "added after scaling");
@@ -387,7 +386,7 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   if (auto problem = certain_fault_at_rest(l)) return fail(problem->keys, problem->text);
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
-  if (const auto gap = platform::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
+  if (const auto gap = board::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
       static_cast<std::int64_t>(l.gauge.stale_after) * 1000 <= gap.count()) {
     return fail(
         "gauge.stale_ms",
@@ -399,9 +398,9 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   }
   const auto problems = encoder_config(out.config.board).validate();
   if (!problems.empty()) return fail("board.encoder", problems.front());
-  if (const auto problem = platform::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
+  if (const auto problem = board::validate(gauge_config(out.config.board))) return fail("board.gauge", *problem);
   if (const auto p = motor_config(out.config.board).validate(); !p.empty()) return fail("board.motor", p.front());
-  if (!out.config.board.realtime_cpus.empty() && !platform::parse_cpu_list(out.config.board.realtime_cpus))
+  if (!out.config.board.realtime_cpus.empty() && !board::parse_cpu_list(out.config.board.realtime_cpus))
     return fail("board.realtime.cpus", "not a CPU list like \"2\" or \"0,2-3\"");
   if (const auto p = realtime_config(out.config.board).validate(); !p.empty()) return fail("board.realtime", p.front());
   if (const auto p = can_config(out.config).validate(); !p.empty()) {

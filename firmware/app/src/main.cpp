@@ -13,8 +13,8 @@
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_off.hpp"
 #include "lever/app/stats_line.hpp"
-#include "lever/platform/kernel_preemption.hpp"
-#include "lever/platform/motor_guard.hpp"
+#include "lever/board/kernel_preemption.hpp"
+#include "lever/board/motor_guard.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/parse.hpp"
 #include "lever/program/text.hpp"
@@ -31,8 +31,8 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 }  // namespace
 
 int main(int argc, char** argv) {
-  // The motor guard lever-fw starts beside itself (platform/motor_guard.hpp): not a user's command, so not in --help.
-  if (argc == 3 && std::string_view(argv[1]) == "--motor-guard") return platform::run_motor_guard(argv[2]);
+  // The motor guard lever-fw starts beside itself (board/motor_guard.hpp): not a user's command, so not in --help.
+  if (argc == 3 && std::string_view(argv[1]) == "--motor-guard") return board::run_motor_guard(argv[2]);
   CLI::App app{"lever-fw: the firmware of one lever of the haptic teleoperation testbed (HSI or TOP)."};
   program::describe(app, "lever-fw");
   std::string config_path, can, motor_state;
@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   if (const auto exit_code = program::parse(app, argc, argv)) return *exit_code;
 
   if (kernel_check) {
-    fmt::print("lever-fw: {}\n", platform::describe(platform::read_kernel_preemption_sources()));
+    fmt::print("lever-fw: {}\n", board::describe(board::read_kernel_preemption_sources()));
     return 0;
   }
   // Before the configuration is validated: the motor must stop whatever else in the file is wrong.

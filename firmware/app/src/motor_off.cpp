@@ -6,7 +6,7 @@
 
 #include "lever/app/fw_config.hpp"
 #include "lever/app/motor_state.hpp"
-#include "lever/platform/pwm_motor.hpp"
+#include "lever/board/pwm_motor.hpp"
 
 namespace lever::app {
 namespace {
@@ -15,16 +15,16 @@ constexpr int kStopped = 0;
 constexpr int kNotStopped = 1;
 
 // The hardware a motor configuration drives: two that agree here are the same motor.
-bool same_motor(const platform::PwmMotorConfig& a, const platform::PwmMotorConfig& b) {
-  const auto line = [](const std::optional<platform::MotorLineConfig>& l) {
+bool same_motor(const board::PwmMotorConfig& a, const board::PwmMotorConfig& b) {
+  const auto line = [](const std::optional<board::MotorLineConfig>& l) {
     return l ? fmt::format("{}:{}", l->chip, l->line.describe()) : std::string();
   };
   return a.sysfs_root == b.sysfs_root && a.pwm_chip == b.pwm_chip && a.pwm_channel == b.pwm_channel &&
          line(a.enable_line) == line(b.enable_line) && line(a.direction_line) == line(b.direction_line);
 }
 
-int stop(const platform::PwmMotorConfig& config, const std::string& named_by) {
-  auto motor = platform::PwmMotor::open(config);
+int stop(const board::PwmMotorConfig& config, const std::string& named_by) {
+  auto motor = board::PwmMotor::open(config);
   if (!motor) {
     fmt::print(stderr, "lever-fw: --motor-off: cannot stop the motor {} names: {}\n", named_by, motor.error().message);
     return kNotStopped;

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/unique_fd.hpp"
 
 namespace lever::app {
 namespace {
@@ -48,7 +48,7 @@ std::string write_motor_state(const std::string& path, const FwConfig& config) {
     return std::string("cannot ") + what + " " + path + ": " + why;
   };
   {
-    platform::UniqueFd fd(::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0644));
+    board::UniqueFd fd(::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0644));
     if (!fd) return failed("write");
     std::size_t written = 0;
     while (written < text.size()) {

@@ -11,21 +11,21 @@ namespace lever::hil::devices {
 
 namespace {
 
-platform::Error os_error(const std::string& what) {
+board::Error os_error(const std::string& what) {
   const int err = errno;
-  return platform::Error{what + ": " + std::strerror(err), err};
+  return board::Error{what + ": " + std::strerror(err), err};
 }
 
 }  // namespace
 
-platform::Result<DeviceSymlink> DeviceSymlink::create(const std::string& path, const std::string& target) {
+board::Result<DeviceSymlink> DeviceSymlink::create(const std::string& path, const std::string& target) {
   struct stat found {};
   if (::lstat(path.c_str(), &found) == 0) {
     if (!S_ISLNK(found.st_mode)) {
-      return platform::Error{"gauge server: rtu.device " + path +
-                                 " exists and is not a symlink; refusing to replace it (remove it, or configure "
-                                 "another path)",
-                             EEXIST};
+      return board::Error{"gauge server: rtu.device " + path +
+                              " exists and is not a symlink; refusing to replace it (remove it, or configure "
+                              "another path)",
+                          EEXIST};
     }
   } else if (errno != ENOENT) {
     return os_error("gauge server: rtu.device " + path);
@@ -36,7 +36,7 @@ platform::Result<DeviceSymlink> DeviceSymlink::create(const std::string& path, c
     return os_error("gauge server: cannot create the symlink " + temporary + " -> " + target);
   }
   if (::rename(temporary.c_str(), path.c_str()) != 0) {
-    platform::Error error = os_error("gauge server: cannot move the symlink to rtu.device " + path);
+    board::Error error = os_error("gauge server: cannot move the symlink to rtu.device " + path);
     ::unlink(temporary.c_str());
     return error;
   }

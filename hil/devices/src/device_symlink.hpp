@@ -3,7 +3,7 @@
 // program under test opens the path it was configured with, unchanged.
 #include <string>
 
-#include "lever/platform/result.hpp"
+#include "lever/board/result.hpp"
 
 namespace lever::hil::devices {
 
@@ -12,7 +12,7 @@ class DeviceSymlink {
   // Makes `path` a symlink to `target`. An existing symlink is replaced (a HIL that died left it, or another
   // run points it elsewhere); anything else at `path` is refused, since it may be a real device or a file
   // somebody needs. The replacement is a rename, so a client reconnecting meanwhile never finds the path gone.
-  static platform::Result<DeviceSymlink> create(const std::string& path, const std::string& target);
+  static board::Result<DeviceSymlink> create(const std::string& path, const std::string& target);
 
   DeviceSymlink(DeviceSymlink&& other) noexcept;
   DeviceSymlink& operator=(DeviceSymlink&& other) noexcept;

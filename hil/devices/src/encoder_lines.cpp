@@ -7,23 +7,23 @@
 #include <cmath>
 #include <thread>
 
+#include "lever/board/config_error.hpp"
+#include "lever/board/monotonic_clock.hpp"
 #include "lever/fw/hal.hpp"
-#include "lever/platform/config_error.hpp"
-#include "lever/platform/monotonic_clock.hpp"
 #include "sim_line.hpp"
 
 namespace lever::hil::devices {
 
 namespace {
 
-using platform::Error;
+using board::Error;
 
 // The A/B levels (as the reader sees them: fw::ab) in forward order; one line changes between neighbours.
 constexpr fw::AbState kGray[4] = {fw::ab(false, false), fw::ab(false, true), fw::ab(true, true), fw::ab(true, false)};
 
 int floor_mod4(std::int64_t value) noexcept { return static_cast<int>(((value % 4) + 4) % 4); }
 
-std::uint64_t now_ns() noexcept { return static_cast<std::uint64_t>(platform::monotonic_ns()); }
+std::uint64_t now_ns() noexcept { return static_cast<std::uint64_t>(board::monotonic_ns()); }
 
 void sleep_until(std::uint64_t deadline_ns) noexcept {
   const timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000u), static_cast<long>(deadline_ns % 1'000'000'000u)};
@@ -128,7 +128,7 @@ namespace {
 
 // Apart from open(): GCC 12 sees a free of a non-heap object in the inlined destructor of a moved-from
 // Result<SimLine> there (a false -Wfree-nonheap-object).
-[[gnu::noinline]] std::optional<Error> open_z(std::optional<SimLine>& into, const platform::GpioEncoderConfig& config) {
+[[gnu::noinline]] std::optional<Error> open_z(std::optional<SimLine>& into, const board::GpioEncoderConfig& config) {
   auto z = SimLine::open(config.chip, *config.line_z, "encoder lines: line_z");
   if (!z) return z.error();
   into.emplace(std::move(z).value());
@@ -137,10 +137,8 @@ namespace {
 
 }  // namespace
 
-platform::Result<EncoderLines> EncoderLines::open(const platform::GpioEncoderConfig& config,
-                                                  EncoderLinesOptions options) {
-  if (const auto problems = config.validate(); !problems.empty())
-    return platform::config_error("encoder lines", problems);
+board::Result<EncoderLines> EncoderLines::open(const board::GpioEncoderConfig& config, EncoderLinesOptions options) {
+  if (const auto problems = config.validate(); !problems.empty()) return board::config_error("encoder lines", problems);
   if (!(options.max_edge_rate_hz > 0) || !std::isfinite(options.max_edge_rate_hz)) {
     return Error{
         "encoder lines: max_edge_rate_hz: " + std::to_string(options.max_edge_rate_hz) + ", must be above 0 and finite",

@@ -9,7 +9,7 @@ namespace lever::hil::devices {
 namespace {
 
 namespace fs = std::filesystem;
-using platform::Error;
+using board::Error;
 
 bool under_sys(const fs::path& path) {
   const fs::path sys("/sys");
@@ -35,7 +35,7 @@ std::string ensure_file(const fs::path& file, const std::string& content) {
 
 }  // namespace
 
-platform::Result<FakePwmChannel> make_fake_pwm_channel(const std::string& root, unsigned chip, unsigned channel) {
+board::Result<FakePwmChannel> make_fake_pwm_channel(const std::string& root, unsigned chip, unsigned channel) {
   if (root.empty()) return Error{"motor readback: sysfs_root is empty", EINVAL};
   std::error_code ec;
   const fs::path resolved = fs::weakly_canonical(fs::absolute(root), ec);

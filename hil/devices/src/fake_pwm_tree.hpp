@@ -1,11 +1,11 @@
 #pragma once
 // A Linux PWM channel's sysfs directory as regular files, for a program that drives PWM through sysfs
-// (platform's SysfsPwm) and for the world that reads back what it wrote. The kernel would make pwmM/ when
+// (the board layer's SysfsPwm) and for the world that reads back what it wrote. The kernel would make pwmM/ when
 // `M` is written to export; a regular file cannot, so the channel's directory is made up front, as a channel
 // exported at boot would be found.
 #include <string>
 
-#include "lever/platform/result.hpp"
+#include "lever/board/result.hpp"
 
 namespace lever::hil::devices {
 
@@ -19,6 +19,6 @@ struct FakePwmChannel {
 // writing to them; a channel a killed program left enabled stays enabled, as a real PWM keeps running), and
 // only what is missing is made, in the state of a freshly exported channel: disabled, duty 0, period 0,
 // polarity normal. Refuses a root that is /sys or under it: the real sysfs is the kernel's.
-platform::Result<FakePwmChannel> make_fake_pwm_channel(const std::string& root, unsigned chip, unsigned channel);
+board::Result<FakePwmChannel> make_fake_pwm_channel(const std::string& root, unsigned chip, unsigned channel);
 
 }  // namespace lever::hil::devices

@@ -27,11 +27,11 @@ namespace lever::hil::devices {
 
 namespace {
 
-using platform::Error;
-using platform::ModbusRtuEndpoint;
-using platform::ModbusTcpEndpoint;
-using platform::RegisterFunction;
-using platform::UniqueFd;
+using board::Error;
+using board::ModbusRtuEndpoint;
+using board::ModbusTcpEndpoint;
+using board::RegisterFunction;
+using board::UniqueFd;
 
 struct ContextFree {
   void operator()(modbus_t* context) const noexcept {
@@ -50,26 +50,26 @@ constexpr std::uint32_t kIndicationTimeoutUs = 100'000;
 
 const char* name_of(RegisterFunction function) { return function == RegisterFunction::holding ? "holding" : "input"; }
 
-const char* name_of(platform::RegisterType type) {
+const char* name_of(board::RegisterType type) {
   switch (type) {
-    case platform::RegisterType::int16:
+    case board::RegisterType::int16:
       return "int16";
-    case platform::RegisterType::uint16:
+    case board::RegisterType::uint16:
       return "uint16";
-    case platform::RegisterType::int32:
+    case board::RegisterType::int32:
       return "int32";
-    case platform::RegisterType::uint32:
+    case board::RegisterType::uint32:
       return "uint32";
-    case platform::RegisterType::float32:
+    case board::RegisterType::float32:
       return "float32";
   }
   return "?";
 }
 
-std::string describe_map(const platform::GaugeRegisterMap& map) {
+std::string describe_map(const board::GaugeRegisterMap& map) {
   std::string text = std::string(name_of(map.function)) + " " + std::to_string(map.address) + " " + name_of(map.type);
-  if (platform::register_count(map.type) == 2) {
-    text += map.word_order == platform::WordOrder::high_first ? " high_first" : " low_first";
+  if (board::register_count(map.type) == 2) {
+    text += map.word_order == board::WordOrder::high_first ? " high_first" : " low_first";
   }
   return text;
 }
@@ -82,7 +82,7 @@ Error modbus_failure(const std::string& what) {
 }  // namespace
 
 struct GaugeServer::Impl {
-  platform::GaugeRegisterMap map;
+  board::GaugeRegisterMap map;
   std::unique_ptr<modbus_t, ContextFree> context;
   std::mutex mapping_mutex;  // set_force() writes the registers while the thread replies from them
   std::unique_ptr<modbus_mapping_t, MappingFree> mapping;
@@ -182,7 +182,7 @@ struct GaugeServer::Impl {
     }
   }
 
-  platform::Result<int> set_up(const ModbusTcpEndpoint& tcp) {
+  board::Result<int> set_up(const ModbusTcpEndpoint& tcp) {
     auto listened = listen_tcp(tcp.host, tcp.port);
     if (!listened) return listened.error();
     listener = std::move(listened.value().fd);
@@ -195,7 +195,7 @@ struct GaugeServer::Impl {
     return 0;
   }
 
-  platform::Result<int> set_up(const ModbusRtuEndpoint& rtu) {
+  board::Result<int> set_up(const ModbusRtuEndpoint& rtu) {
     auto opened = PtyPair::open();
     if (!opened) return Error{"gauge server: " + opened.error().message, opened.error().errno_value};
     pty.emplace(std::move(opened).value());
@@ -215,12 +215,12 @@ struct GaugeServer::Impl {
   }
 };
 
-platform::Result<GaugeServer> GaugeServer::open(const platform::ModbusGaugeConfig& config) {
-  platform::ModbusGaugeConfig checked = config;
+board::Result<GaugeServer> GaugeServer::open(const board::ModbusGaugeConfig& config) {
+  board::ModbusGaugeConfig checked = config;
   if (auto* tcp = std::get_if<ModbusTcpEndpoint>(&checked.transport); tcp != nullptr && tcp->port == 0) {
     tcp->port = 1;  // any free port: valid for a server, not for the client validate() was written for
   }
-  if (auto problem = platform::validate(checked)) return Error{"gauge server: " + *problem, EINVAL};
+  if (auto problem = board::validate(checked)) return Error{"gauge server: " + *problem, EINVAL};
 
   auto impl = std::make_unique<Impl>();
   impl->map = config.registers;
@@ -235,7 +235,7 @@ platform::Result<GaugeServer> GaugeServer::open(const platform::ModbusGaugeConfi
     return modbus_failure("indication timeout");
   }
 
-  const int count = platform::register_count(config.registers.type);
+  const int count = board::register_count(config.registers.type);
   const bool holding = config.registers.function == RegisterFunction::holding;
   const auto address = static_cast<unsigned>(config.registers.address);
   impl->mapping.reset(modbus_mapping_new_start_address(0, 0, 0, 0, holding ? address : 0, holding ? count : 0,

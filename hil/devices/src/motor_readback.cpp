@@ -11,17 +11,17 @@
 #include <string_view>
 
 #include "fake_pwm_tree.hpp"
+#include "lever/board/config_error.hpp"
+#include "lever/board/unique_fd.hpp"
 #include "lever/hil/devices/pwm_controller_state.hpp"
-#include "lever/platform/config_error.hpp"
-#include "lever/platform/unique_fd.hpp"
 #include "sim_line.hpp"
 
 namespace lever::hil::devices {
 
 namespace {
 
-using platform::Error;
-using platform::UniqueFd;
+using board::Error;
+using board::UniqueFd;
 
 // A regular file rewritten by pwrite at offset 0 keeps the tail of a longer old value ("0\n000\n"): every
 // value ends in a newline, so the value is the first line.
@@ -60,7 +60,7 @@ struct Line {
   bool asserted_is_high() const noexcept { return !active_low; }
 };
 
-platform::Result<Line> open_line(const platform::MotorLineConfig& config, const std::string& field) {
+board::Result<Line> open_line(const board::MotorLineConfig& config, const std::string& field) {
   auto sim = SimLine::open(config.chip, config.line, "motor readback: " + field);
   if (!sim) return sim.error();
   return Line{std::move(sim).value(), config.active_low};
@@ -110,7 +110,7 @@ struct MotorReadback::Impl {
     }
   }
   // The tree of regular files lever-fw writes (make_fake_pwm_channel), its attributes opened; empty, or why not.
-  std::string open_tree(const platform::PwmMotorConfig& config) {
+  std::string open_tree(const board::PwmMotorConfig& config) {
     auto tree = make_fake_pwm_channel(config.sysfs_root, config.pwm_chip, config.pwm_channel);
     if (!tree) return tree.error().message;
     const std::string& dir = tree.value().channel_dir;
@@ -181,9 +181,9 @@ struct MotorReadback::Impl {
   }
 };
 
-platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConfig& config, ReleasedLines released) {
+board::Result<MotorReadback> MotorReadback::open(const board::PwmMotorConfig& config, ReleasedLines released) {
   if (const auto problems = config.validate(); !problems.empty())
-    return platform::config_error("motor readback", problems);
+    return board::config_error("motor readback", problems);
   auto impl = std::make_unique<Impl>();
   impl->description = "pwmchip" + std::to_string(config.pwm_chip) + "/pwm" + std::to_string(config.pwm_channel) +
                       " under " + config.sysfs_root;
@@ -197,7 +197,7 @@ platform::Result<MotorReadback> MotorReadback::open(const platform::PwmMotorConf
 
   struct LineField {
     const char* field;
-    const std::optional<platform::MotorLineConfig>& config;
+    const std::optional<board::MotorLineConfig>& config;
     std::optional<Line>& line;
   };
   for (const LineField& l : {LineField{"enable_line", config.enable_line, impl->enable_line},

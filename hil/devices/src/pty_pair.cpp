@@ -11,9 +11,9 @@ namespace lever::hil::devices {
 
 namespace {
 
-platform::Error os_error(const std::string& what) {
+board::Error os_error(const std::string& what) {
   const int err = errno;
-  return platform::Error{"pty: " + what + ": " + std::strerror(err), err};
+  return board::Error{"pty: " + what + ": " + std::strerror(err), err};
 }
 
 // No echo, no line editing, no CR/LF translation: the bytes of a frame pass as they are.
@@ -26,7 +26,7 @@ bool make_raw(int fd) {
 
 }  // namespace
 
-platform::Result<PtyPair> PtyPair::open() {
+board::Result<PtyPair> PtyPair::open() {
   PtyPair pair;
   pair.master_.reset(::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC));
   if (!pair.master_) return os_error("posix_openpt");

@@ -24,25 +24,24 @@ std::optional<std::uint64_t> next_number(std::string_view text, std::size_t& at)
 
 }  // namespace
 
-std::optional<platform::Result<PwmControllerState>> PwmControllerState::find(const std::string& root, unsigned chip,
-                                                                             unsigned channel) {
+std::optional<board::Result<PwmControllerState>> PwmControllerState::find(const std::string& root, unsigned chip,
+                                                                          unsigned channel) {
   const std::string path = root + "/class/pwm/pwmchip" + std::to_string(chip) + "/device/hw_state";
   if (::access(path.c_str(), F_OK) != 0) return std::nullopt;
   if (channel != 0) {
-    return platform::Result<PwmControllerState>(
-        platform::Error{"motor readback: pwmchip" + std::to_string(chip) +
-                            " is a lever-pwm-sim controller, which has channel 0 "
-                            "only (pwm_channel is " +
-                            std::to_string(channel) + ")",
-                        EINVAL});
+    return board::Result<PwmControllerState>(board::Error{"motor readback: pwmchip" + std::to_string(chip) +
+                                                              " is a lever-pwm-sim controller, which has channel 0 "
+                                                              "only (pwm_channel is " +
+                                                              std::to_string(channel) + ")",
+                                                          EINVAL});
   }
-  platform::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  board::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
   if (!fd) {
     const int err = errno;
-    return platform::Result<PwmControllerState>(
-        platform::Error{"motor readback: cannot open " + path + ": " + std::strerror(err), err});
+    return board::Result<PwmControllerState>(
+        board::Error{"motor readback: cannot open " + path + ": " + std::strerror(err), err});
   }
-  return platform::Result<PwmControllerState>(PwmControllerState(std::move(fd), path));
+  return board::Result<PwmControllerState>(PwmControllerState(std::move(fd), path));
 }
 
 std::optional<PwmOutput> PwmControllerState::read() const noexcept {
@@ -77,7 +76,7 @@ std::optional<PwmOutput> PwmControllerState::read() const noexcept {
 std::vector<PwmApplied> PwmControllerState::apply_log() const {
   std::vector<PwmApplied> log;
   const std::string path = path_.substr(0, path_.rfind('/')) + "/apply_log";
-  const platform::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  const board::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
   if (!fd) return log;
   char buffer[4096];
   const ssize_t got = ::read(fd.get(), buffer, sizeof buffer);

@@ -26,12 +26,12 @@ float to_float(double raw) noexcept {
 
 }  // namespace
 
-double raw_for_newtons(double newtons, const platform::GaugeRegisterMap& map) noexcept {
+double raw_for_newtons(double newtons, const board::GaugeRegisterMap& map) noexcept {
   return (newtons - map.offset) / map.scale;
 }
 
-RegisterWords encode_registers(double raw, platform::RegisterType type, platform::WordOrder order) noexcept {
-  using platform::RegisterType;
+RegisterWords encode_registers(double raw, board::RegisterType type, board::WordOrder order) noexcept {
+  using board::RegisterType;
   std::uint32_t bits = 0;
   switch (type) {
     case RegisterType::int16:
@@ -50,7 +50,7 @@ RegisterWords encode_registers(double raw, platform::RegisterType type, platform
   }
   const auto high = static_cast<std::uint16_t>(bits >> 16);
   const auto low = static_cast<std::uint16_t>(bits & 0xFFFFu);
-  if (order == platform::WordOrder::high_first) return {{high, low}, 2};
+  if (order == board::WordOrder::high_first) return {{high, low}, 2};
   return {{low, high}, 2};
 }
 

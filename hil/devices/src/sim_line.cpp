@@ -13,14 +13,14 @@ namespace lever::hil::devices {
 
 namespace {
 
-using platform::Error;
+using board::Error;
 
 struct ChipClose {
   void operator()(gpiod_chip* chip) const noexcept { gpiod_chip_close(chip); }
 };
 using ChipPtr = std::unique_ptr<gpiod_chip, ChipClose>;
 
-// As platform's encoder and motor find a chip: a path, a gpiochipN name, else a label. Never a bare number,
+// As the board layer's encoder and motor find a chip: a path, a gpiochipN name, else a label. Never a bare number,
 // which libgpiod's own lookup would take too: the device must find exactly the chip the board's program does.
 ChipPtr open_chip(const std::string& chip) {
   if (chip.empty()) {
@@ -47,8 +47,7 @@ std::optional<std::filesystem::path> sim_chip_dir(const std::string& chip_name) 
 
 }  // namespace
 
-platform::Result<SimLine> SimLine::open(const std::string& chip, const platform::LineRef& line,
-                                        const std::string& field) {
+board::Result<SimLine> SimLine::open(const std::string& chip, const board::LineRef& line, const std::string& field) {
   const std::string what = field + " (" + line.describe() + " on \"" + chip + "\")";
   const ChipPtr handle = open_chip(chip);
   if (!handle) {

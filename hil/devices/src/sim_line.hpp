@@ -6,9 +6,9 @@
 #include <optional>
 #include <string>
 
-#include "lever/platform/line_ref.hpp"
-#include "lever/platform/result.hpp"
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/line_ref.hpp"
+#include "lever/board/result.hpp"
+#include "lever/board/unique_fd.hpp"
 
 namespace lever::hil::devices {
 
@@ -17,8 +17,7 @@ class SimLine {
   // `chip` as the board's config gives it (a path, a gpiochipN name, or a label), `line` by name or offset;
   // `field` names the config field in messages ("line_a", "fault_line"). Fails unless the chip is a gpio-sim
   // chip (a sysfs directory /sys/devices/platform/gpio-sim.*/gpiochipN/) and the line is on it.
-  static platform::Result<SimLine> open(const std::string& chip, const platform::LineRef& line,
-                                        const std::string& field);
+  static board::Result<SimLine> open(const std::string& chip, const board::LineRef& line, const std::string& field);
 
   // The physical level; empty when the file could not be read.
   std::optional<bool> level() const noexcept;
@@ -31,8 +30,8 @@ class SimLine {
 
  private:
   SimLine() = default;
-  platform::UniqueFd value_;
-  platform::UniqueFd pull_;
+  board::UniqueFd value_;
+  board::UniqueFd pull_;
   unsigned offset_ = 0;
   std::string description_;
   std::string chip_description_;

@@ -9,7 +9,7 @@
 
 namespace lever::hil::devices {
 
-platform::Result<TcpListener> listen_tcp(const std::string& host, int port) {
+board::Result<TcpListener> listen_tcp(const std::string& host, int port) {
   const std::string where = "gauge server: tcp " + host + " port " + std::to_string(port);
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
@@ -17,12 +17,12 @@ platform::Result<TcpListener> listen_tcp(const std::string& host, int port) {
   hints.ai_flags = AI_PASSIVE | AI_NUMERICHOST | AI_NUMERICSERV;
   addrinfo* found = nullptr;
   if (const int rc = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found); rc != 0) {
-    return platform::Error{where + ": " + ::gai_strerror(rc) + " (the host must be a numeric address)", EINVAL};
+    return board::Error{where + ": " + ::gai_strerror(rc) + " (the host must be a numeric address)", EINVAL};
   }
   const auto fail = [&](const char* step) {
     const int err = errno;
     ::freeaddrinfo(found);
-    return platform::Error{where + ": " + step + ": " + std::strerror(err), err};
+    return board::Error{where + ": " + step + ": " + std::strerror(err), err};
   };
   TcpListener listener;
   listener.fd.reset(::socket(found->ai_family, SOCK_STREAM | SOCK_CLOEXEC, 0));
@@ -38,7 +38,7 @@ platform::Result<TcpListener> listen_tcp(const std::string& host, int port) {
   socklen_t length = sizeof bound;
   if (::getsockname(listener.fd.get(), reinterpret_cast<sockaddr*>(&bound), &length) != 0) {
     const int err = errno;
-    return platform::Error{where + ": getsockname: " + std::strerror(err), err};
+    return board::Error{where + ": getsockname: " + std::strerror(err), err};
   }
   listener.port = bound.ss_family == AF_INET6 ? ntohs(reinterpret_cast<const sockaddr_in6*>(&bound)->sin6_port)
                                               : ntohs(reinterpret_cast<const sockaddr_in*>(&bound)->sin_port);

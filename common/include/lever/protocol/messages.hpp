@@ -38,7 +38,7 @@ enum class MessageKind : std::uint8_t { command, motion, force, energy, settings
 
 // The message set, a row a message: its block of identifiers (one per pair, or one per pair and sender), its names
 // in common/protocol/lever.dbc, and whether a lever's board hears it. The identifiers, classify(), the board's CAN
-// filters (platform::lever_pair_filters), the bridge's default allow list and the tools' message names are all read
+// filters (board::lever_pair_filters), the bridge's default allow list and the tools' message names are all read
 // from here; tests/common/test_protocol_dbc.cpp holds it to the DBC.
 struct MessageSpec {
   MessageKind kind;

@@ -5,22 +5,22 @@
 #include <string>
 #include <vector>
 
+#include "lever/board/board_can_port_config.hpp"
+#include "lever/board/gpio_encoder_config.hpp"
+#include "lever/board/loop_watchdog.hpp"
+#include "lever/board/modbus_gauge_config.hpp"
+#include "lever/board/modbus_gauge_presets.hpp"
+#include "lever/board/pwm_motor_config.hpp"
+#include "lever/board/realtime_config.hpp"
 #include "lever/fw/lever_config.hpp"
-#include "lever/platform/board_can_port_config.hpp"
-#include "lever/platform/gpio_encoder_config.hpp"
-#include "lever/platform/loop_watchdog.hpp"
-#include "lever/platform/modbus_gauge_config.hpp"
-#include "lever/platform/modbus_gauge_presets.hpp"
-#include "lever/platform/pwm_motor_config.hpp"
-#include "lever/platform/realtime_config.hpp"
 #include "lever/program/config_schema.hpp"
 
 namespace lever::app {
 
-// The board's default amplifier: the common weighing-amplifier layout (platform::preset_gross_weight_int32:
+// The board's default amplifier: the common weighing-amplifier layout (board::preset_gross_weight_int32:
 // the gross weight as a 32-bit integer in holding registers 0-1, high word first, in grams) on Modbus TCP,
-// with the platform's default timing and the testbed load cell's range as its saturation bounds.
-const platform::ModbusGaugeConfig& default_gauge();
+// with the board layer's default timing and the testbed load cell's range as its saturation bounds.
+const board::ModbusGaugeConfig& default_gauge();
 
 struct BoardConfig {
   std::string can_interface = "can0";
@@ -37,9 +37,9 @@ struct BoardConfig {
   std::int64_t gauge_port = 502, gauge_unit_id = 255;
   std::string gauge_device = "/dev/ttyUSB0";
   std::int64_t gauge_baud = 115200, gauge_stop_bits = 1, gauge_slave_id = 1;
-  platform::Parity gauge_parity = platform::Parity::none;
+  board::Parity gauge_parity = board::Parity::none;
   // Defaults: default_gauge()'s.
-  platform::GaugeRegisterMap gauge_registers = default_gauge().registers;
+  board::GaugeRegisterMap gauge_registers = default_gauge().registers;
   double gauge_saturation_raw_min = *default_gauge().registers.saturation_raw_min;
   double gauge_saturation_raw_max = *default_gauge().registers.saturation_raw_max;
   std::int64_t gauge_poll_us = default_gauge().poll_period.count();
@@ -64,19 +64,19 @@ struct BoardConfig {
 
   std::int64_t can_link_retry_ms = 50, can_link_retry_max_ms = 1000;
 
-  // A hardware watchdog fed only while the loop advances (platform::LoopWatchdog); empty: none. The service
+  // A hardware watchdog fed only while the loop advances (board::LoopWatchdog); empty: none. The service
   // manager's watchdog needs no key: its interval is the unit's WatchdogSec= (lever-fw@.service).
   std::string watchdog_device;
   std::int64_t watchdog_timeout_s = 2;
 };
 
 // The libgpiod backend's configuration from the board's keys.
-platform::GpioEncoderConfig encoder_config(const BoardConfig& board);
+board::GpioEncoderConfig encoder_config(const BoardConfig& board);
 // The Modbus backend's configuration from the board's keys.
-platform::ModbusGaugeConfig gauge_config(const BoardConfig& board);
-platform::PwmMotorConfig motor_config(const BoardConfig& board);
-platform::RealtimeConfig realtime_config(const BoardConfig& board);
-platform::LoopWatchdogConfig watchdog_config(const BoardConfig& board);
+board::ModbusGaugeConfig gauge_config(const BoardConfig& board);
+board::PwmMotorConfig motor_config(const BoardConfig& board);
+board::RealtimeConfig realtime_config(const BoardConfig& board);
+board::LoopWatchdogConfig watchdog_config(const BoardConfig& board);
 
 // The core's defaults, but for a board: the Modbus gauge already reports newtons (its register map scales
 // the amplifier's units), so the core's own gauge calibration is the identity, its saturation the load cell's
@@ -89,7 +89,7 @@ struct FwConfig {
   BoardConfig board{};
 };
 
-platform::BoardCanPortConfig can_config(const FwConfig& config);
+board::BoardCanPortConfig can_config(const FwConfig& config);
 
 // The schema of a FwConfig: every key, bound to `config`'s fields.
 program::ConfigSchema schema_for(FwConfig& config);
@@ -116,7 +116,7 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
 // `motor` is empty when they cannot be had (the file unreadable or not TOML, a motor key wrong or missing, the
 // motor's configuration invalid); `problems` lists every problem the file has, the motor's keys' first.
 struct MotorKeys {
-  std::optional<platform::PwmMotorConfig> motor;
+  std::optional<board::PwmMotorConfig> motor;
   std::vector<std::string> problems;
 };
 // Which keys must be in the file, since a key left out would be its default: `identity`, those that say which

@@ -5,15 +5,15 @@
 #include <cstdint>
 #include <optional>
 
+#include "lever/board/modbus_gauge.hpp"
 #include "lever/fw/hal.hpp"
-#include "lever/platform/modbus_gauge.hpp"
 
 namespace lever::app {
 
 struct GaugePort {
-  explicit GaugePort(const platform::ModbusGauge* g = nullptr) noexcept : gauge(g) {}
+  explicit GaugePort(const board::ModbusGauge* g = nullptr) noexcept : gauge(g) {}
 
-  const platform::ModbusGauge* gauge = nullptr;
+  const board::ModbusGauge* gauge = nullptr;
   fw::Tick now_tick = 0;
   std::int64_t now_ns = 0;
 

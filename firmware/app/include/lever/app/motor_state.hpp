@@ -31,7 +31,7 @@ struct MotorState {
   // Empty: the file names no motor, `problems` say why. A state is whole or it is none: every [board.motor] key
   // and the writer's three, nothing wrong with any, since the lever writes them all at once; a file short of one
   // (empty, cut, another program's) would otherwise name the defaults' motor.
-  std::optional<platform::PwmMotorConfig> motor;
+  std::optional<board::PwmMotorConfig> motor;
   MotorStateWriter writer;
   std::vector<std::string> problems;
 };

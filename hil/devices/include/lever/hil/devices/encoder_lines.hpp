@@ -1,5 +1,5 @@
 #pragma once
-// A quadrature encoder on a gpio-sim chip, for a board's program reading it with platform::GpioEncoder from
+// A quadrature encoder on a gpio-sim chip, for a board's program reading it with board::GpioEncoder from
 // the same GpioEncoderConfig: a thread of its own moves the A and B lines one Gray-code step at a time (by
 // their sysfs pull files, so the reader gets real kernel edge events) toward the count the simulated world
 // sets each tick, and raises the index line Z while the count is at the index position.
@@ -13,8 +13,8 @@
 #include <optional>
 #include <string>
 
-#include "lever/platform/gpio_encoder_config.hpp"
-#include "lever/platform/result.hpp"
+#include "lever/board/gpio_encoder_config.hpp"
+#include "lever/board/result.hpp"
 
 namespace lever::hil::devices {
 
@@ -39,8 +39,7 @@ class EncoderLines {
   // Resolves the chip (path, gpiochipN or label) and the lines (name or offset) as GpioEncoder does; fails
   // unless they are on a gpio-sim chip. Count 0 is wherever the A/B lines are now (their pulls are set to
   // their current levels); Z is driven to match the count. Then starts the thread.
-  static platform::Result<EncoderLines> open(const platform::GpioEncoderConfig& config,
-                                             EncoderLinesOptions options = {});
+  static board::Result<EncoderLines> open(const board::GpioEncoderConfig& config, EncoderLinesOptions options = {});
 
   EncoderLines(EncoderLines&&) noexcept;
   EncoderLines& operator=(EncoderLines&&) noexcept;

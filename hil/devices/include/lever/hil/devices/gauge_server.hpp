@@ -11,8 +11,8 @@
 #include <memory>
 #include <string>
 
-#include "lever/platform/modbus_gauge_config.hpp"
-#include "lever/platform/result.hpp"
+#include "lever/board/modbus_gauge_config.hpp"
+#include "lever/board/result.hpp"
 
 namespace lever::hil::devices {
 
@@ -25,11 +25,11 @@ struct GaugeServerCounters {
 
 class GaugeServer {
  public:
-  // Checks the config as the client does (platform::validate; a TCP port of 0 is allowed here and means any
+  // Checks the config as the client does (board::validate; a TCP port of 0 is allowed here and means any
   // free port), then listens (TCP, SO_REUSEADDR) or makes the pty and the symlink at rtu.device (an existing
   // symlink is replaced, anything else there is refused), and starts serving. The registers hold 0 N.
   // Only the configured registers exist: a request for any other address or table gets an exception.
-  static platform::Result<GaugeServer> open(const platform::ModbusGaugeConfig& config);
+  static board::Result<GaugeServer> open(const board::ModbusGaugeConfig& config);
 
   GaugeServer(GaugeServer&&) noexcept;
   GaugeServer& operator=(GaugeServer&&) noexcept;
@@ -44,7 +44,7 @@ class GaugeServer {
   // the registers: every later one carries it (or a newer value).
   std::uint64_t set_force(double newtons) noexcept;
   // Muted: requests are read and counted but never answered, as an amplifier that hangs. The client times
-  // out (and, doing what platform::ModbusGauge does, reconnects).
+  // out (and, doing what board::ModbusGauge does, reconnects).
   void set_muted(bool muted) noexcept;
 
   GaugeServerCounters counters() const noexcept;

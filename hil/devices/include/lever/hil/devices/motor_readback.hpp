@@ -1,5 +1,5 @@
 #pragma once
-// The motor driver as the simulated world sees it: what the board's program (platform::PwmMotor, from the same
+// The motor driver as the simulated world sees it: what the board's program (board::PwmMotor, from the same
 // PwmMotorConfig) drives, read back as a torque. The PWM side is a sysfs tree of regular files under the
 // config's sysfs_root, which this makes and PwmMotor writes unchanged; the enable, direction and fault lines
 // are lines of a gpio-sim chip, whose sysfs attributes show what PwmMotor drives and let the world drive the
@@ -10,14 +10,14 @@
 #include <memory>
 #include <string>
 
-#include "lever/platform/pwm_motor_config.hpp"
-#include "lever/platform/result.hpp"
+#include "lever/board/pwm_motor_config.hpp"
+#include "lever/board/result.hpp"
 
 namespace lever::hil::devices {
 
 struct MotorReading {
   // The driver's torque: duty * full_scale_current_a * torque_constant_nm_per_a * gear_ratio (the inverse of
-  // platform's TorqueToDuty), negative when the direction line is asserted; 0 unless `enabled`.
+  // the board layer's TorqueToDuty), negative when the direction line is asserted; 0 unless `enabled`.
   double torque_nm = 0.0;
   bool enabled = false;   // the driver's enable line asserted (always, without one); the PWM's enable flag is not
                           // asked: a disabled PWM's pin is undefined, and may hold high
@@ -48,8 +48,8 @@ class MotorReadback {
   // pull to it, so that when the program releases the line gpio-sim leaves it there. The level is sampled: one
   // a program drives for less than the time between two reads and then releases is not seen, and the line keeps
   // the level it had before.
-  static platform::Result<MotorReadback> open(const platform::PwmMotorConfig& config,
-                                              ReleasedLines released = ReleasedLines::hold);
+  static board::Result<MotorReadback> open(const board::PwmMotorConfig& config,
+                                           ReleasedLines released = ReleasedLines::hold);
 
   MotorReadback(MotorReadback&&) noexcept;
   MotorReadback& operator=(MotorReadback&&) noexcept;

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "lever/platform/result.hpp"
-#include "lever/platform/unique_fd.hpp"
+#include "lever/board/result.hpp"
+#include "lever/board/unique_fd.hpp"
 
 namespace lever::hil::devices {
 
@@ -39,8 +39,8 @@ class PwmControllerState {
  public:
   // <root>/class/pwm/pwmchip<chip>/device/hw_state, when that chip is a lever-pwm-sim controller; nullopt when
   // it is not one (another driver, or a tree of regular files); an error when it is one but cannot be used.
-  static std::optional<platform::Result<PwmControllerState>> find(const std::string& root, unsigned chip,
-                                                                  unsigned channel);
+  static std::optional<board::Result<PwmControllerState>> find(const std::string& root, unsigned chip,
+                                                               unsigned channel);
 
   // One pread and a parse, no allocation; nullopt when the attribute cannot be read or parsed.
   std::optional<PwmOutput> read() const noexcept;
@@ -49,8 +49,8 @@ class PwmControllerState {
   const std::string& path() const noexcept { return path_; }
 
  private:
-  PwmControllerState(platform::UniqueFd fd, std::string path) noexcept : fd_(std::move(fd)), path_(std::move(path)) {}
-  platform::UniqueFd fd_;
+  PwmControllerState(board::UniqueFd fd, std::string path) noexcept : fd_(std::move(fd)), path_(std::move(path)) {}
+  board::UniqueFd fd_;
   std::string path_;  // .../hw_state
 };
 
