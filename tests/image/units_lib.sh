@@ -28,11 +28,9 @@ installed_configs=/etc/lever
 # journal_lines UNIT CURSOR_FILE: the unit's journal lines (-o cat) from its first in this boot, written as they come.
 # It polls with a cursor rather than following: a `journalctl -f -n 0` started just before its unit can miss all of
 # its lines without a word; a cursor cannot skip a line, nor miss one written before it started.
-# While a scenario runs (quiet_followers ... resume_followers) it starts no journalctl: the rig's harness starts no
-# program while the levers run a scenario (tests/kernel/lever_sites_lib.sh), and on this image's voluntary-preemption
-# kernel an ordinary process's system calls can hold the loops (docs/deploy.md, "The board's kernel"); four
-# followers polling at 5 Hz were 20 programs a second beside the levers. The journal keeps the lines; the cursor
-# takes them up where it stopped.
+# While a scenario runs (quiet_followers ... resume_followers) it starts no journalctl, as the rig's harness starts
+# no program then: on this image's voluntary-preemption kernel an ordinary process's system calls can hold the
+# loops (docs/deploy.md, "CI's image tests"). The journal keeps the lines; the cursor takes them up.
 journal_lines() {
   while :; do
     [[ -e $work/followers-quiet ]] || journalctl -q -u "$1" -o cat --cursor-file="$2"
@@ -43,12 +41,13 @@ quiet_followers() { : >"$work/followers-quiet"; }
 # resume_followers FILE...: the followers poll again, and each FILE (a follower's output) has grown: what the units
 # wrote during the scenario is read before the checks that follow (status lines come every second)
 resume_followers() {
-  local file sizes=() i deadline=$((SECONDS + 10))
-  for file in "$@"; do sizes+=("$(stat -c %s "$file" 2>/dev/null || echo 0)"); done
+  local files=("$@") sizes=() i deadline=$((SECONDS + 10))
+  size() { stat -c %s "$1" 2>/dev/null || echo 0; }
+  for i in "${!files[@]}"; do sizes[i]=$(size "${files[i]}"); done
   rm -f "$work/followers-quiet"
-  for i in "${!sizes[@]}"; do
-    while (($(stat -c %s "${@:i+1:1}" 2>/dev/null || echo 0) <= sizes[i])); do
-      ((SECONDS < deadline)) || { echo "FAILED: ${@:i+1:1} did not grow within 10 s of the followers' resuming" >&2; return 1; }
+  for i in "${!files[@]}"; do
+    while (($(size "${files[i]}") <= sizes[i])); do
+      ((SECONDS < deadline)) || { echo "FAILED: ${files[i]} did not grow within 10 s of the followers' resuming" >&2; return 1; }
       sleep 0.2
     done
   done

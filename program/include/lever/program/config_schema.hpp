@@ -37,13 +37,7 @@ class ConfigSchema {
   // that holds the range (a bit rate kept in a double is still whole in the file).
   template <typename Int>
   void integer(std::string key, Int& value, std::int64_t lo, std::int64_t hi, std::string unit, std::string doc) {
-    add({std::move(key), std::move(unit), std::move(doc),
-         [&value, lo, hi](const toml::node& n) -> std::optional<std::string> {
-           std::int64_t v = 0;
-           if (auto e = read_integer(n, lo, hi, v)) return e;
-           value = static_cast<Int>(v);
-           return std::nullopt;
-         },
+    add({std::move(key), std::move(unit), std::move(doc), load_integer<Int>(value, lo, hi),
          [&value] { return std::to_string(static_cast<std::int64_t>(value)); }});
   }
   // The same, for a value the program decides while the file leaves it out (a random id): printed as a comment
@@ -51,13 +45,7 @@ class ConfigSchema {
   template <typename Int>
   void integer(std::string key, std::optional<Int>& value, std::int64_t lo, std::int64_t hi, std::string unit,
                std::string doc) {
-    add({std::move(key), std::move(unit), std::move(doc),
-         [&value, lo, hi](const toml::node& n) -> std::optional<std::string> {
-           std::int64_t v = 0;
-           if (auto e = read_integer(n, lo, hi, v)) return e;
-           value = static_cast<Int>(v);
-           return std::nullopt;
-         },
+    add({std::move(key), std::move(unit), std::move(doc), load_integer<Int>(value, lo, hi),
          [&value]() -> std::optional<std::string> {
            if (!value) return std::nullopt;
            return std::to_string(static_cast<std::int64_t>(*value));
@@ -153,6 +141,17 @@ class ConfigSchema {
   static std::string number_text(double v);
 
  private:
+  // Both integer fields load alike; `target` is the value or its std::optional.
+  template <typename Int, typename Target>
+  static std::function<std::optional<std::string>(const toml::node&)> load_integer(Target& target, std::int64_t lo,
+                                                                                   std::int64_t hi) {
+    return [&target, lo, hi](const toml::node& n) -> std::optional<std::string> {
+      std::int64_t v = 0;
+      if (auto e = read_integer(n, lo, hi, v)) return e;
+      target = static_cast<Int>(v);
+      return std::nullopt;
+    };
+  }
   struct Field {
     std::string key, unit, doc;
     Load load;
