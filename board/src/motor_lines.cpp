@@ -5,6 +5,7 @@
 #include <sys/ioctl.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstring>
 
@@ -13,6 +14,10 @@ namespace lever::board {
 namespace {
 
 Error os_error(int err, std::string message) { return Error{std::move(message) + ": " + std::strerror(err), err}; }
+
+// The v1 interface's event FIFO of a line (gpiolib-cdev.c: 16 events; when full, the newest are dropped). A read
+// asking for this many that gets them all has found it full.
+constexpr unsigned kKernelFifo = 16;
 
 enum class Direction { output, input };
 
@@ -91,12 +96,25 @@ Result<MotorLines> MotorLines::open(const PwmMotorConfig& config) {
     if (!found) return found.error();
     Found& f = found.value();
     const int flags = config.fault_line->active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
-    if (gpiod_line_request_input_flags(f.line, config.consumer.c_str(), flags) < 0) {
+    if (gpiod_line_request_both_edges_events_flags(f.line, config.consumer.c_str(), flags) < 0) {
       const int err = errno;
-      return os_error(err, f.where + ": cannot request it as an input" + line_user_if_busy(f.line, err));
+      return os_error(err, f.where + ": cannot request its edge events" + line_user_if_busy(f.line, err));
+    }
+    const int fd = gpiod_line_event_get_fd(f.line);
+    const int fl = ::fcntl(fd, F_GETFL);
+    if (fl < 0 || ::fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
+      const int err = errno;
+      return os_error(err, f.where + ": cannot make its events non-blocking");
+    }
+    // After the request, so every change after this read is also an event; one between the request and the read
+    // is in both, and its event's type is the level after it.
+    const int level = gpiod_line_get_value(f.line);
+    if (level < 0) {
+      const int err = errno;
+      return os_error(err, f.where + ": cannot read its level");
     }
     lines.description_ += describe("fault_line", f, *config.fault_line);
-    lines.fault_.emplace(Input{std::move(f.chip), f.line});
+    lines.fault_.emplace(Input{std::move(f.chip), f.line, fd, level != 0});
   }
   return lines;
 }
@@ -123,9 +141,24 @@ void MotorLines::forget_written() noexcept {
 
 std::optional<bool> MotorLines::fault() noexcept {
   if (!fault_) return false;
-  const int value = gpiod_line_get_value(fault_->line);
-  if (value < 0) return std::nullopt;
-  return value != 0;
+  Input& in = *fault_;
+  std::array<gpiod_line_event, kKernelFifo> events{};
+  for (;;) {
+    const int n = gpiod_line_event_read_fd_multiple(in.events_fd, events.data(), kKernelFifo);
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+      return std::nullopt;
+    }
+    // Both edges are requested, so the kernel types each event by the (logical) level it read after the edge.
+    if (n > 0) in.asserted = events[static_cast<std::size_t>(n) - 1].event_type == GPIOD_LINE_EVENT_RISING_EDGE;
+    if (static_cast<unsigned>(n) < kKernelFifo) break;
+    // A full FIFO dropped the newest edges, the ones that say the level now: read it once, the one value read on
+    // this path (a driver's fault output that changes 16 times between two steps is a fault of its own).
+    const int value = gpiod_line_get_value(in.line);
+    if (value < 0) return std::nullopt;
+    in.asserted = value != 0;
+  }
+  return in.asserted;
 }
 
 bool set_line_request(int request_fd, bool asserted) noexcept {

@@ -27,7 +27,9 @@ class MotorLines {
   bool set_negative(bool negative) noexcept;
   // The next set_* writes whatever it wrote before: another process (the motor guard) may have set the lines since.
   void forget_written() noexcept;
-  // The fault input's asserted state; false with no fault line; empty when it could not be read.
+  // The fault input's asserted state as its edge events say (false with no fault line; empty when they could not
+  // be read): no call reads the line's value, which on a driver that sleeps (gpio-sim, an I2C or SPI expander)
+  // takes the chip's mutex, so the loop never waits on another holder of it (docs/board-motor.md).
   std::optional<bool> fault() noexcept;
 
   // The enable line's request (-1: none): GPIOHANDLE_SET_LINE_VALUES_IOCTL with 0 deasserts it, active-low or not.
@@ -46,6 +48,8 @@ class MotorLines {
   struct Input {
     ChipPtr chip;  // one per line: the lines of a driver may sit on different chips
     gpiod_line* line = nullptr;
+    int events_fd = -1;  // the line's edge events, non-blocking; owned by the line's request
+    bool asserted = false;
   };
   static bool set(std::optional<Output>& line, bool asserted) noexcept;
 

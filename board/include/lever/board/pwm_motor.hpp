@@ -22,7 +22,7 @@ namespace lever::board {
 struct PwmMotorStats {
   std::uint64_t commands = 0;
   std::uint64_t failed_commands = 0;    // commands with a write to the PWM or a line that failed
-  std::uint64_t fault_read_errors = 0;  // fault line reads that failed (each reported as a fault)
+  std::uint64_t fault_read_errors = 0;  // fault line event reads that failed (each reported as a fault)
   std::uint32_t duty_ns = 0;            // as last commanded
   bool negative = false;
   bool enabled = false;
