@@ -27,7 +27,7 @@
  */
 #include <linux/err.h>
 #include <linux/module.h>
-#include <linux/mutex.h>
+#include <linux/spinlock.h>
 #include <linux/platform_device.h>
 #include <linux/pwm.h>
 #include <linux/math64.h>
@@ -60,7 +60,14 @@ struct lever_pwm_sim_applied {
 
 struct lever_pwm_sim {
 	struct pwm_chip chip;
-	struct mutex lock; /* guards hw, applies and log against a concurrent read of the attributes */
+	/*
+	 * Guards hw, applies and log against a concurrent read of the attributes. A spinlock, as a register block's
+	 * driver would take: the world (lever-hil serve, an ordinary process) reads hw_state every tick, and under a
+	 * fully preemptible kernel a mutex held by a preempted reader would keep the lever's real-time loop waiting in
+	 * its duty write, as gpio-sim's chip mutex did (docs/deploy.md, "The board's kernel", finding 3); a spinlock
+	 * is never held by a preempted task.
+	 */
+	spinlock_t lock;
 	struct pwm_state hw;
 	u64 pin_ppm; /* the pin's output: millionths of each period it is high (at power-up: disabled, low) */
 	u64 applies;
@@ -93,7 +100,7 @@ static int lever_pwm_sim_apply(struct pwm_chip *chip, struct pwm_device *pwm, co
 	struct lever_pwm_sim *sim = to_sim(chip);
 	int ret = 0;
 
-	mutex_lock(&sim->lock);
+	spin_lock(&sim->lock);
 	if (sim->hw.enabled && state->enabled && state->polarity != sim->hw.polarity) {
 		ret = -EBUSY;
 	} else {
@@ -104,7 +111,7 @@ static int lever_pwm_sim_apply(struct pwm_chip *chip, struct pwm_device *pwm, co
 			.time_ns = ktime_get_ns(), .state = *state, .pin_ppm = sim->pin_ppm
 		};
 	}
-	mutex_unlock(&sim->lock);
+	spin_unlock(&sim->lock);
 	return ret;
 }
 
@@ -113,9 +120,9 @@ static int lever_pwm_sim_get_state(struct pwm_chip *chip, struct pwm_device *pwm
 {
 	struct lever_pwm_sim *sim = to_sim(chip);
 
-	mutex_lock(&sim->lock);
+	spin_lock(&sim->lock);
 	*state = sim->hw;
-	mutex_unlock(&sim->lock);
+	spin_unlock(&sim->lock);
 	return 0;
 }
 
@@ -130,12 +137,12 @@ static ssize_t hw_state_show(struct device *dev, struct device_attribute *attr, 
 	struct lever_pwm_sim *sim = dev_get_drvdata(dev);
 	ssize_t len;
 
-	mutex_lock(&sim->lock);
+	spin_lock(&sim->lock);
 	len = sysfs_emit(buf, "%d %llu %llu %s %llu %llu %llu\n", sim->hw.enabled ? 1 : 0, sim->hw.period,
 			 sim->hw.duty_cycle, sim->hw.polarity == PWM_POLARITY_INVERSED ? "inversed" : "normal",
 			 sim->applies, sim->applies ? sim->log[sim->applies % LEVER_PWM_SIM_LOG].time_ns : 0,
 			 sim->pin_ppm);
-	mutex_unlock(&sim->lock);
+	spin_unlock(&sim->lock);
 	return len;
 }
 static DEVICE_ATTR_RO(hw_state);
@@ -147,14 +154,14 @@ static ssize_t apply_log_show(struct device *dev, struct device_attribute *attr,
 	ssize_t len = 0;
 	u64 n;
 
-	mutex_lock(&sim->lock);
+	spin_lock(&sim->lock);
 	n = sim->applies > LEVER_PWM_SIM_LOG ? sim->applies - LEVER_PWM_SIM_LOG + 1 : 1;
 	for (; n <= sim->applies; n++) {
 		a = &sim->log[n % LEVER_PWM_SIM_LOG];
 		len += sysfs_emit_at(buf, len, "%llu %llu %d %llu %llu %llu\n", n, a->time_ns,
 				     a->state.enabled ? 1 : 0, a->state.period, a->state.duty_cycle, a->pin_ppm);
 	}
-	mutex_unlock(&sim->lock);
+	spin_unlock(&sim->lock);
 	return len;
 }
 static DEVICE_ATTR_RO(apply_log);
@@ -174,7 +181,7 @@ static int lever_pwm_sim_probe(struct platform_device *pdev)
 	sim = devm_kzalloc(&pdev->dev, sizeof(*sim), GFP_KERNEL);
 	if (!sim)
 		return -ENOMEM;
-	mutex_init(&sim->lock);
+	spin_lock_init(&sim->lock);
 	sim->chip.dev = &pdev->dev;
 	sim->chip.ops = &lever_pwm_sim_ops;
 	sim->chip.npwm = 1;
