@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# lever-plot as a user runs it, on a recording lever_one_site made in the kernel rig (tests/plot/: its candump -L
+# lever-plot as a user runs it, on a recording lever_one_site made in the kernel rig (tests/cli/one-site-session.tar.xz: its candump -L
 # log and both levers' --stats-json lines, xz-compressed): the figures it prints against tools/dbc-decode --summary
 # and the levers' own counters, the PNGs, a lever-hil trace, and garbage (one line, exit 2).
 # usage: lever_plot_cli.sh path/to/lever-plot path/to/lever-hil REPO_ROOT
@@ -14,7 +14,7 @@ run() {  # run ARGS...: never more than 60 s; sets code, output in $work/out and
 check "--help names the status lines" grep -q -- "--status" "$work/help"
 "$plot" --version >"$work/version"; check "--version exits 0" test $? -eq 0
 
-tar -C "$work" -xJf "$root/tests/plot/one-site-session.tar.xz"
+tar -C "$work" -xJf "$root/tests/cli/one-site-session.tar.xz"
 log=$work/one-site.candump
 run "$log" --status "$work/hsi.stats" --status "$work/top.stats" --out "$work/session"
 check "the recording: exit 0 (got $code: $(head -c 300 "$work/err"))" test "$code" -eq 0

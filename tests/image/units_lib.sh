@@ -94,10 +94,11 @@ udev_grants() {
   local role gpio node export
   udevadm settle
   for role in hsi top; do
-    gpio=${role}_gpio
-    node=/dev/$(basename "${!gpio}")
-    check "udev: $role's GPIO chip $node is group gpio's, 0660 ($(stat -c '%U:%G %a' "$node"))" \
-      test "$(stat -c '%G %a' "$node")" = "gpio 660"
+    for gpio in "${role}_encoder_gpio" "${role}_gpio"; do
+      node=/dev/$(basename "${!gpio}")
+      check "udev: $role's GPIO chip $node is group gpio's, 0660 ($(stat -c '%U:%G %a' "$node"))" \
+        test "$(stat -c '%G %a' "$node")" = "gpio 660"
+    done
     export=/sys/class/pwm/pwmchip$(pwm_chip $role)/export
     check "udev: $export is group gpio's, writable ($(stat -c '%U:%G %a' "$export"))" \
       test "$(stat -c '%G' "$export")" = gpio -a "$(( $(stat -c '0%a' "$export") & 020 ))" -ne 0

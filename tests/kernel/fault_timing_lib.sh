@@ -49,8 +49,8 @@ mono_offset() {
     [[ -r $work/$role.toml ]] && { pin_inactive "$role" 0 || :; }
     local gpio=${role}_gpio
     if [[ -n ${!gpio:-} ]]; then
-      read -r base <"$(echo "${!gpio%/*}"/gpio/gpiochip*/base)" && printf -v "enable_gpio_$role" '%s' $((base + 2))
-      lines+=($((base + 2)))
+      read -r base <"$(echo "${!gpio%/*}"/gpio/gpiochip*/base)" && printf -v "enable_gpio_$role" '%s' "$base"
+      lines+=("$base")
     fi
   done
   trace_setup "${lines[@]}" || { check "tracefs: the kernel's stamps of the enable lines" false; return 1; }
@@ -130,8 +130,8 @@ pwm_inactive() {
   read -r enabled period duty polarity applies last pin <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" &&
     pin_inactive "$1" "$pin"
 }
-# enable_low ROLE: the lever's driver enable line (MOTOR_EN, line 2) low
-enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio2/value" && [[ $value == 0 ]]; }
+# enable_low ROLE: the lever's driver enable line (MOTOR_EN, line 0 of its motor chip) low
+enable_low() { local gpio=${1}_gpio value; read -r value <"${!gpio}/sim_gpio0/value" && [[ $value == 0 ]]; }
 # poll_rt on|off: while it times a fault, the test's shell runs at SCHED_FIFO 50, below the levers (80) and above
 # serve's world (an ordinary process), so that its polls are not queued behind the world's steps.
 poll_rt() { if [[ $1 == on ]]; then chrt -f -p 50 $$; else chrt -o -p 0 $$; fi >/dev/null; }

@@ -1,7 +1,8 @@
 # Sourced by the kernel-rig tests that run real lever-fw processes behind `lever-hil serve` (run-in-guest
-# --gpio-sim --pwm-sim --virtual-time), after lib.sh and gpio_sim_lib.sh. Each lever gets a gpio-sim chip named
-# after its role with the lines its config names by default (ENC_A, ENC_B, MOTOR_EN, MOTOR_DIR, MOTOR_FAULT), a
-# PWM channel of the kernel's PWM core (the rig's simulated controllers: the HSI's pwmchip0, the TOP's
+# --gpio-sim --pwm-sim --virtual-time), after lib.sh and gpio_sim_lib.sh. Each lever gets two gpio-sim chips with
+# the lines its config names by default: the encoder's, named after its role (ENC_A, ENC_B), and the motor driver's,
+# ROLE-motor (MOTOR_EN, MOTOR_DIR, MOTOR_FAULT), as a board's encoder and driver lines sit on different controllers
+# (why two: lever_chip), a PWM channel of the kernel's PWM core (the rig's simulated controllers: the HSI's pwmchip0, the TOP's
 # pwmchip1), and a config file $work/<role>.toml.
 #
 # The guest runs in virtual time (one vCPU, 1 ns an instruction): every timer fires on time in guest time, so
@@ -50,8 +51,15 @@ dbc=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/common/protocol/lever.db
 dbc_decode=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/tools/dbc-decode
 pids=()
 
-lever_chip() {  # lever_chip ROLE: its gpio-sim chip; ROLE_gpio is its sysfs directory (sim_gpioN/value: line N)
-  sim_chip "$1" ENC_A ENC_B MOTOR_EN MOTOR_DIR MOTOR_FAULT >/dev/null || return 1
+# lever_chip ROLE: its gpio-sim chips; ROLE_gpio is the motor chip's sysfs directory (sim_gpioN/value: line N, MOTOR_EN
+# is line 0), ROLE_encoder_gpio the encoder chip's. Two chips, not one: gpio-sim serves a chip under one mutex, which
+# the world takes for each of up to 20000 encoder edges a second; a lever's loop writing its direction line or reading
+# back its enable line on the same chip would wait for it whenever an ordinary process preempted the world holding it
+# (docs/deploy.md, "The board's kernel", finding 3). A board's encoder is a counter or a GPIO bank of its own.
+lever_chip() {
+  sim_chip "$1" ENC_A ENC_B >/dev/null || return 1
+  printf -v "${1}_encoder_gpio" '%s' "$LEVER_GPIO_SYSFS"
+  sim_chip "$1-motor" MOTOR_EN MOTOR_DIR MOTOR_FAULT >/dev/null || return 1
   printf -v "${1}_gpio" '%s' "$LEVER_GPIO_SYSFS"
 }
 pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, none exported yet
@@ -69,7 +77,7 @@ pwm_chips() {  # the rig's simulated PWM controllers are there, one per lever, n
 # board image's /etc/lever); prints every key that differs from the example
 write_config() {
   local role=$1 can=$2 file=$work/$1.toml; shift 2
-  local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role\"")
+  local sets=(--set "board.can.interface=\"$can\"" --set "board.encoder.chip=\"$role\"" --set "board.motor.line_chip=\"$role-motor\"")
   [[ $role == top ]] && sets+=(--set "board.motor.pwm_chip=$(pwm_chip top)")
   while (($# >= 3)); do sets+=(--set "$1.$2=$3"); shift 3; done
   "$bin/lever-fw" --config "$examples/$role.toml" "${sets[@]}" --check-config >"$file" ||
@@ -313,13 +321,13 @@ wait_until_true() {
   done
 }
 # no_torque ROLE: the lever's driver makes no torque, read from the hardware's outputs: its PWM pin gives it no duty
-# (pin_inactive), or its enable line (MOTOR_EN, line 2) is low. Neither the controller's enabled flag nor the
+# (pin_inactive), or its enable line (MOTOR_EN, line 0 of its motor chip) is low. Neither the controller's enabled flag nor the
 # lever's own telemetry.
 no_torque() {
   local enabled period duty polarity applies last pin value=1 gpio=${1}_gpio
   read -r enabled period duty polarity applies last pin <"/sys/devices/platform/lever-pwm-sim.$(pwm_chip "$1")/hw_state" ||
     return 1
-  [[ -r ${!gpio}/sim_gpio2/value ]] && read -r value <"${!gpio}/sim_gpio2/value"
+  [[ -r ${!gpio}/sim_gpio0/value ]] && read -r value <"${!gpio}/sim_gpio0/value"
   pin_inactive "$1" "$pin" || [[ $value == 0 ]]
 }
 
