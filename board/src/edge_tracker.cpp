@@ -75,6 +75,7 @@ void EdgeTracker::apply(EncoderLine line, const LineEvent& event, fw::EncoderEdg
     return;
   }
   const std::size_t i = static_cast<std::size_t>(line);
+  ++ab_events_;
   const bool before = level_[i];
   if (event.timestamp_ns <= settle_until_ns_) {
     // Raced with the values read at open: already counted in them or not, the type tells the level after it.
@@ -145,6 +146,7 @@ void EdgeTracker::judge_level_check(fw::EncoderEdge* out, std::size_t& count, st
     if ((check_.seen[i] & bit(check_.value[i])) == 0 && !check_.moved_after[i]) level_[i] = check_.value[i];
   }
   ++stats_.resyncs;
+  ++ab_events_;
   out[count++] = fw::EncoderEdge{levels(), false};
 }
 

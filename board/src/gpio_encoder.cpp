@@ -2,13 +2,22 @@
 
 #include <fcntl.h>
 #include <gpiod.h>
+#include <poll.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/eventfd.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
 #include <optional>
+#include <system_error>
+#include <thread>
 #include <utility>
 
 #include "gpio_chip.hpp"
@@ -30,7 +39,35 @@ std::uint64_t to_ns(const timespec& ts) noexcept {
 // errno is taken before the message is built: building it may allocate, which may set errno.
 Error os_error(int err, std::string message) { return Error{std::move(message) + ": " + std::strerror(err), err}; }
 
+// The level reader must not run at the real-time priority it would inherit (lever-fw runs as SCHED_FIFO 50
+// under systemd): it waits on the GPIO driver's lock, and it has nothing to do that is urgent. Nice 0 unless the
+// process was made nicer than that.
+void become_ordinary_thread() noexcept {
+  sched_param param{};
+  param.sched_priority = 0;
+  ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &param);
+  const auto tid = static_cast<id_t>(::gettid());
+  errno = 0;
+  const int nice = ::getpriority(PRIO_PROCESS, tid);
+  if (errno == 0 && nice < 0) ::setpriority(PRIO_PROCESS, tid, 0);
+}
+
 }  // namespace
+
+// The level checks' value reads run on a thread of their own. A value read enters the GPIO driver, which on
+// gpio-sim and on any expander behind I2C or SPI takes the chip's mutex; whoever writes the lines may hold it,
+// and a plain mutex lends the loop's priority to nobody, so the loop would wait as long as that writer is kept
+// from running. The event reads stay on the loop: the kernel's event FIFOs are under a spinlock.
+//
+// The loop asks by a request number and a write to an eventfd; the reader answers the newest request with the
+// values and the time around their read, then publishes the request's number. The loop reads the answer only
+// once the number is its own, and the reader writes an answer only for a request newer than its last, which
+// the loop makes only after it is done with the last answer: the two never touch `answer` at once.
+struct LevelAnswer {
+  std::uint64_t lo_ns = 0, hi_ns = 0;
+  fw::AbState values = 0;
+  bool ok = false;
+};
 
 struct GpioEncoder::Impl {
   ChipPtr chip;
@@ -39,14 +76,79 @@ struct GpioEncoder::Impl {
   EdgeTracker tracker;
   std::string description;
 
+  int wake_fd = -1;  // eventfd, non-blocking: a request, or the stop
+  std::thread reader;
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> requested{0};  // the loop's newest request
+  std::atomic<std::uint64_t> answered{0};   // the request `answer` is for
+  LevelAnswer answer;
+  // The loop's own: the request it waits for (0: none), and the tracker's A/B events when it asked.
+  std::uint64_t next_request = 0;
+  std::uint64_t waiting_for = 0;
+  std::uint64_t ab_events_asked = 0;
+
   Impl(ChipPtr c, std::array<gpiod_line*, kEncoderLines> l, std::array<int, kEncoderLines> f, EdgeTracker t,
        std::string d)
       : chip(std::move(c)), lines(l), fds(f), tracker(t), description(std::move(d)) {}
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  // The reader goes before the lines it reads are released with the chip.
+  ~Impl();
+
+  // 0, or the errno of what failed.
+  int start_level_reader() noexcept;
+  void run_level_reader() noexcept;
 
   // Reads every line's FIFO; returns the time after which each was found empty (or its stage full).
   std::uint64_t read_events() noexcept;
-  void start_level_check() noexcept;
+  void take_level_answer() noexcept;
+  void ask_for_levels() noexcept;
 };
+
+GpioEncoder::Impl::~Impl() {
+  if (reader.joinable()) {
+    stop.store(true, std::memory_order_release);
+    const std::uint64_t one = 1;
+    [[maybe_unused]] const auto written = ::write(wake_fd, &one, sizeof one);
+    reader.join();
+  }
+  if (wake_fd >= 0) ::close(wake_fd);
+}
+
+int GpioEncoder::Impl::start_level_reader() noexcept {
+  wake_fd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (wake_fd < 0) return errno;
+  try {
+    reader = std::thread([this] { run_level_reader(); });
+  } catch (const std::system_error& failure) {
+    return failure.code().value();
+  }
+  return 0;
+}
+
+void GpioEncoder::Impl::run_level_reader() noexcept {
+  become_ordinary_thread();
+  ::pthread_setname_np(::pthread_self(), "lever-enc-lvl");  // at most 15 characters
+  std::uint64_t last = 0;
+  for (;;) {
+    pollfd wake{wake_fd, POLLIN, 0};
+    if (::poll(&wake, 1, -1) < 0) continue;  // EINTR; an eventfd has no other way to fail here
+    std::uint64_t count = 0;
+    [[maybe_unused]] const auto got = ::read(wake_fd, &count, sizeof count);
+    if (stop.load(std::memory_order_acquire)) return;
+    // Requests that came while the last was read are answered by one read: the loop waits for the newest only.
+    const std::uint64_t request = requested.load(std::memory_order_acquire);
+    if (request == last) continue;
+    last = request;
+    answer.lo_ns = static_cast<std::uint64_t>(monotonic_ns());
+    const int a = gpiod_line_get_value(lines[0]);
+    const int b = gpiod_line_get_value(lines[1]);
+    answer.hi_ns = static_cast<std::uint64_t>(monotonic_ns());
+    answer.ok = a >= 0 && b >= 0;
+    answer.values = fw::ab(a > 0, b > 0);
+    answered.store(request, std::memory_order_release);
+  }
+}
 
 std::uint64_t GpioEncoder::Impl::read_events() noexcept {
   std::array<gpiod_line_event, kKernelFifo> buffer{};
@@ -82,16 +184,36 @@ std::uint64_t GpioEncoder::Impl::read_events() noexcept {
   return complete;
 }
 
-void GpioEncoder::Impl::start_level_check() noexcept {
-  const std::uint64_t lo = static_cast<std::uint64_t>(monotonic_ns());
-  const int a = gpiod_line_get_value(lines[0]);
-  const int b = gpiod_line_get_value(lines[1]);
-  const std::uint64_t hi = static_cast<std::uint64_t>(monotonic_ns());
-  if (a < 0 || b < 0) {
+void GpioEncoder::Impl::take_level_answer() noexcept {
+  if (waiting_for == 0) return;
+  if (tracker.ab_events() != ab_events_asked || !tracker.wants_level_check()) {
+    // The lines moved since we asked: the answer is no longer a read of the levels the tracker holds. A new
+    // request follows once the tracker is idle again; the reader answers it after the one it may be doing.
+    waiting_for = 0;
+    return;
+  }
+  // Not yet: the reader may be waiting for the driver, which is what it is there for.
+  if (answered.load(std::memory_order_acquire) != waiting_for) return;
+  waiting_for = 0;
+  if (!answer.ok) {
     tracker.note_read_error();
     return;
   }
-  tracker.begin_level_check(fw::ab(a != 0, b != 0), lo, hi);
+  // Nothing moved since the request and the values were read after it: as good as a read made right then.
+  tracker.begin_level_check(answer.values, answer.lo_ns, answer.hi_ns);
+}
+
+void GpioEncoder::Impl::ask_for_levels() noexcept {
+  const std::uint64_t request = ++next_request;
+  requested.store(request, std::memory_order_release);
+  const std::uint64_t one = 1;
+  // Never waits: the eventfd is non-blocking, and its counter would have to near 2^64 to refuse.
+  if (::write(wake_fd, &one, sizeof one) != static_cast<ssize_t>(sizeof one)) {
+    tracker.note_read_error();  // no check this time; asked again on the next drain
+    return;
+  }
+  waiting_for = request;
+  ab_events_asked = tracker.ab_events();
 }
 
 GpioEncoder::GpioEncoder(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
@@ -161,14 +283,21 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
   if (b < 0) return os_error(err_b, "encoder line_b: cannot read its level");
   const std::uint64_t margin_ns = std::uint64_t{config.edge_latency_us} * 1000u;
   EdgeTracker tracker(fw::ab(a != 0, b != 0), read_end, margin_ns);
-  return GpioEncoder(std::make_unique<Impl>(std::move(chip), lines, fds, tracker, std::move(description)));
+  auto impl = std::make_unique<Impl>(std::move(chip), lines, fds, tracker, std::move(description));
+  if (const int err = impl->start_level_reader(); err != 0) {
+    return os_error(err, "encoder on " + chip_text + ": cannot start the thread that reads its levels");
+  }
+  return GpioEncoder(std::move(impl));
 }
 
 fw::EdgeDrain GpioEncoder::drain_edges(fw::EncoderEdge* out, std::size_t capacity) noexcept {
   if (!impl_) return {};
+  // Before this drain's edges: an answer that came in the sleep since the last drain begins its check with
+  // the levels it was asked for, whatever the lines do now.
+  impl_->take_level_answer();
   const std::uint64_t read_empty_at = impl_->read_events();
   const fw::EdgeDrain drain = impl_->tracker.deliver(out, capacity, read_empty_at);
-  if (impl_->tracker.wants_level_check()) impl_->start_level_check();
+  if (impl_->waiting_for == 0 && impl_->tracker.wants_level_check()) impl_->ask_for_levels();
   return drain;
 }
 

@@ -225,3 +225,69 @@ TEST_CASE("level check: a loss that a later contradicting edge reports is not re
   CHECK(u.stats().impossible == 1);
   CHECK(u.stats().level_checks == 1);
 }
+
+TEST_CASE("ab_events moves with every A/B edge applied and every re-sync, never with an index rise") {
+  EdgeTracker t(ab(false, false), kOpen, kMargin);
+  t.stage(A, {kOpen - 10, false});  // absorbed by the settle window: no edge out, but the line's time moved
+  drain(t, 2'000);
+  CHECK(t.ab_events() == 1);
+  t.stage(Z, {2'100, true});
+  drain(t, 3'000);
+  CHECK(t.ab_events() == 1);
+  t.stage(B, {3'100, true});
+  drain(t, 4'000);
+  CHECK(t.ab_events() == 2);
+  t.begin_level_check(ab(true, true), 4'100, 4'200);  // A's rise never came
+  CHECK(drain(t, 5'000).lost == 1);
+  CHECK(t.ab_events() == 3);
+}
+
+TEST_CASE("level check begun drains after its values were read: judged as a read at that time") {
+  // As GpioEncoder does it: asked for after the drain at 2'000, read at 2'100..2'200 on another thread, begun
+  // two drains later, none of which delivered an A/B edge.
+  SECTION("values that agree pass") {
+    EdgeTracker t(ab(false, true), kOpen, kMargin);
+    drain(t, 2'000);
+    const auto asked = t.ab_events();
+    drain(t, 3'000);
+    drain(t, 4'000);
+    REQUIRE(t.ab_events() == asked);
+    REQUIRE(t.wants_level_check());
+    t.begin_level_check(ab(false, true), 2'100, 2'200);
+    CHECK(drain(t, 5'000).lost == 0);
+    CHECK(t.stats().level_checks == 1);
+  }
+  SECTION("a line that disagrees is a loss, re-synced") {
+    EdgeTracker t(ab(false, false), kOpen, kMargin);
+    drain(t, 2'000);
+    drain(t, 3'000);
+    t.begin_level_check(ab(false, true), 2'100, 2'200);
+    const auto d = drain(t, 4'000);
+    CHECK(d.lost == 1);
+    CHECK(levels_of(d) == std::vector<AbState>{ab(0, 1)});
+  }
+  SECTION("an edge inside the window that reaches the FIFO only after the check began is no loss") {
+    EdgeTracker t(ab(false, false), kOpen, kMargin);
+    drain(t, 2'000);
+    drain(t, 3'000);
+    t.begin_level_check(ab(false, true), 2'100, 2'200);
+    t.stage(B, {2'150, true});
+    CHECK(drain(t, 4'000).lost == 0);
+    CHECK(t.stats().resyncs == 0);
+  }
+}
+
+TEST_CASE("values read before an A/B edge that was delivered since judge only the line that stood still") {
+  // GpioEncoder drops such an answer anyway (ab_events() moved); were one begun, the line that moved after the
+  // read counts as moved in its window, so the old value cannot fail on it, while the other line is judged.
+  EdgeTracker t(ab(false, false), kOpen, kMargin);
+  drain(t, 2'000);
+  const auto asked = t.ab_events();
+  t.stage(A, {2'600, true});
+  CHECK(drain(t, 3'000).lost == 0);
+  CHECK(t.ab_events() != asked);
+  t.begin_level_check(ab(false, true), 2'100, 2'200);  // A low as it was then; B high: its rise never came
+  const auto d = drain(t, 4'000);
+  CHECK(d.lost == 1);
+  CHECK(levels_of(d) == std::vector<AbState>{ab(1, 1)});
+}

@@ -4,15 +4,25 @@
 //   LEVER_GPIO_SYSFS  its sysfs directory (pull files) LEVER_GPIO_GEN    the generator
 // The chip's lines: 0 "enc-a", 1 "enc-b", 2 "enc-z". The guest's clock is emulated and slow: the tests assert
 // what was delivered, never how fast.
+#include <dlfcn.h>
+#include <linux/gpio.h>
+#include <pthread.h>
+#include <sched.h>
 #include <spawn.h>
+#include <sys/ioctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
+#include <atomic>
 #include <catch2/catch.hpp>
+#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -26,6 +36,27 @@
 #include "lever/fw/lever.hpp"
 
 extern char** environ;
+
+// Every value read of a GPIO line, whatever libgpiod call made it, ends in this ioctl: counted here by the thread
+// that made it (this executable's ioctl stands in for libc's in libgpiod too), so a test can tell whether the
+// thread that drains, the loop's, ever reads a value.
+namespace {
+std::atomic<std::uint64_t> value_reads_on_main{0};
+std::atomic<std::uint64_t> value_reads_elsewhere{0};
+}  // namespace
+
+extern "C" int ioctl(int fd, unsigned long request, ...) noexcept {
+  using Real = int (*)(int, unsigned long, ...);
+  static const Real real = reinterpret_cast<Real>(::dlsym(RTLD_NEXT, "ioctl"));
+  std::va_list args;
+  va_start(args, request);
+  void* arg = va_arg(args, void*);
+  va_end(args);
+  if (request == GPIOHANDLE_GET_LINE_VALUES_IOCTL) {
+    (::gettid() == ::getpid() ? value_reads_on_main : value_reads_elsewhere).fetch_add(1, std::memory_order_relaxed);
+  }
+  return real(fd, request, arg);
+}
 
 using lever::board::GpioEncoder;
 using lever::board::GpioEncoderConfig;
@@ -130,7 +161,11 @@ GenSummary run_generator(const std::vector<std::string>& steps, const std::funct
 
 class Session {
  public:
-  explicit Session(const GpioEncoderConfig& config) : encoder_(open_or_fail(config)), decoder_(encoder_.levels()) {}
+  explicit Session(const GpioEncoderConfig& config)
+      : encoder_(open_or_fail(config)),
+        decoder_(encoder_.levels()),
+        main_reads_at_open_(value_reads_on_main.load()),
+        other_reads_at_open_(value_reads_elsewhere.load()) {}
 
   GenSummary generate(const std::vector<std::string>& steps, bool drain_meanwhile) {
     return run_generator(steps, drain_meanwhile ? std::function<void()>([this] { drain(); }) : nullptr);
@@ -167,6 +202,9 @@ class Session {
   std::uint64_t allocations() const { return allocations_; }
   std::uint64_t drains() const { return drains_; }
   const std::vector<std::int64_t>& index_at() const { return index_at_; }
+  // Value reads since open by the thread that drains (the tests' main thread), and by any other.
+  std::uint64_t value_reads_on_caller() const { return value_reads_on_main.load() - main_reads_at_open_; }
+  std::uint64_t value_reads_elsewhere_since_open() const { return value_reads_elsewhere.load() - other_reads_at_open_; }
 
   void report(const char* what, const GenSummary& s) const {
     const auto& st = encoder_.stats();
@@ -174,13 +212,16 @@ class Session {
     std::printf(
         "measured: %s: generated %llu edges in %.2f s (%.0f edges/s); delivered %llu edges, %llu index; decoded "
         "%lld; lost %llu (fifo_full %llu, impossible %llu, reordered %llu, resyncs %llu); level checks %llu; "
-        "illegal transitions %llu; drains %llu; allocations in drains %s\n",
+        "value reads on the draining thread %llu, on others %llu; illegal transitions %llu; drains %llu; "
+        "allocations in drains %s\n",
         what, static_cast<unsigned long long>(s.edges), s.elapsed_s,
         s.elapsed_s > 0 ? static_cast<double>(s.edges) / s.elapsed_s : 0.0, static_cast<unsigned long long>(st.edges),
         static_cast<unsigned long long>(st.index_edges), static_cast<long long>(decoder_.count()),
         static_cast<unsigned long long>(lost_), static_cast<unsigned long long>(st.fifo_full),
         static_cast<unsigned long long>(st.impossible), static_cast<unsigned long long>(st.reordered),
         static_cast<unsigned long long>(st.resyncs), static_cast<unsigned long long>(st.level_checks),
+        static_cast<unsigned long long>(value_reads_on_caller()),
+        static_cast<unsigned long long>(value_reads_elsewhere_since_open()),
         static_cast<unsigned long long>(decoder_.illegal()), static_cast<unsigned long long>(drains_), allocs.c_str());
     std::fflush(stdout);
   }
@@ -192,6 +233,8 @@ class Session {
   std::uint64_t allocations_ = 0;
   std::uint64_t drains_ = 0;
   std::vector<std::int64_t> index_at_;
+  std::uint64_t main_reads_at_open_;
+  std::uint64_t other_reads_at_open_;
 };
 
 // By label and line names, as a board's config would say it.
@@ -233,6 +276,74 @@ TEST_CASE("paced quadrature is counted exactly: 4000 edges forward, then 1500 ba
   CHECK(s.encoder().stats().level_checks > 100);
   CHECK(s.encoder().stats().resyncs == 0);
   CHECK(s.allocations() == 0);
+  // ... with every value read on the encoder's own thread.
+  CHECK(s.value_reads_on_caller() == 0);
+  CHECK(s.value_reads_elsewhere_since_open() >= 2 * s.encoder().stats().level_checks);
+}
+
+namespace {
+
+// The calling thread as lever-fw's service starts it (SCHED_FIFO 50), and nice -5, which a SCHED_OTHER thread
+// created from it would keep; as it was again at the end of the scope. Only root may.
+class RealtimeCaller {
+ public:
+  RealtimeCaller() {
+    ::pthread_getschedparam(::pthread_self(), &policy_, &param_);
+    nice_ = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()));
+    sched_param fifo{};
+    fifo.sched_priority = 50;
+    applied_ = ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), -5) == 0 &&
+               ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &fifo) == 0;
+  }
+  ~RealtimeCaller() {
+    ::pthread_setschedparam(::pthread_self(), policy_, &param_);
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), nice_);
+  }
+  RealtimeCaller(const RealtimeCaller&) = delete;
+  RealtimeCaller& operator=(const RealtimeCaller&) = delete;
+  bool applied() const { return applied_; }
+
+ private:
+  int policy_ = SCHED_OTHER;
+  sched_param param_{};
+  int nice_ = 0;
+  bool applied_ = false;
+};
+
+// The id of this process's thread called `name`, 0 if none.
+pid_t thread_named(const std::string& name) {
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string line;
+    std::getline(comm, line);
+    if (line == name) return static_cast<pid_t>(std::stol(task.path().filename().string()));
+  }
+  return 0;
+}
+
+}  // namespace
+
+TEST_CASE("level checks read the values on the encoder's own ordinary thread, never on the thread that drains") {
+  // On a real-time caller, as lever-fw's loop is: the reader must drop the priority it would inherit.
+  const RealtimeCaller caller;
+  Session s(by_label_and_names());
+  s.settle(300);  // the lines stand still: a level check is asked for whenever none is pending
+  s.report("300 drains, lines idle, the caller at SCHED_FIFO 50", GenSummary{});
+  const auto& st = s.encoder().stats();
+  CHECK(st.level_checks > 100);
+  CHECK(s.lost() == 0);
+  CHECK(s.allocations() == 0);
+  CHECK(s.value_reads_on_caller() == 0);
+  // Two reads per check: the counting sees the reads, so the 0 above is no blind spot.
+  CHECK(s.value_reads_elsewhere_since_open() >= 2 * st.level_checks);
+  const pid_t reader = thread_named("lever-enc-lvl");
+  REQUIRE(reader != 0);
+  if (caller.applied()) {
+    CHECK(::sched_getscheduler(reader) == SCHED_OTHER);
+    CHECK(::getpriority(PRIO_PROCESS, static_cast<id_t>(reader)) == 0);
+  } else {
+    WARN("not root: the reader's scheduling is not checked");
+  }
 }
 
 TEST_CASE("index rises are delivered where the index line rose") {
@@ -303,7 +414,7 @@ TEST_CASE("an edge that follows a lost one on the same line contradicts the leve
   Session s(by_label_and_names());
   // 17 toggles of A: the FIFO keeps 16, the 17th (A's last move) is dropped.
   auto gen = s.generate({"rate=0", "bounce:a=17"}, false);
-  s.drain();  // one drain: delivers the 16 (the full FIFO already counts as a loss), starts a level check
+  s.drain();  // one drain: delivers the 16 (the full FIFO already counts as a loss), asks for a level check
   const auto lost_before = s.lost();
   // The next move of A arrives while the tracked level is still the wrong one.
   gen = s.generate({"rate=0", "bounce:a=1"}, false);

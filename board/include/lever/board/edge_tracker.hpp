@@ -20,6 +20,11 @@
 // within the margin of the read may show either level. A failed check re-syncs the line to the level read and
 // delivers one extra edge with the corrected levels, so one loss is reported once and the decoder downstream
 // follows the lines again.
+//
+// The values may be read long before begin_level_check() is called (GpioEncoder reads them on a thread of its
+// own): the check is as good as a read at the moment it was asked for as long as the values were read after
+// that moment and ab_events() has not moved since (no A/B edge delivered, so nothing newer than the read is in
+// the tracked levels).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -77,6 +82,9 @@ class EdgeTracker {
   bool wants_level_check() const noexcept;
   void begin_level_check(fw::AbState values, std::uint64_t lo_ns, std::uint64_t hi_ns) noexcept;
   bool level_check_pending() const noexcept { return check_.pending; }
+  // Every A/B edge applied (delivered, or absorbed by the settle window at open) and every re-sync: while it
+  // stands still, the levels and edge times a level check starts from have not moved.
+  std::uint64_t ab_events() const noexcept { return ab_events_; }
 
   fw::AbState levels() const noexcept { return fw::ab(level_[0], level_[1]); }
   const EdgeStats& stats() const noexcept { return stats_; }
@@ -110,6 +118,7 @@ class EdgeTracker {
   std::uint64_t margin_ns_;
   LevelCheck check_{};
   std::uint32_t pending_lost_ = 0;
+  std::uint64_t ab_events_ = 0;
   EdgeStats stats_{};
 };
 
