@@ -16,8 +16,6 @@
 #include <cstring>
 #include <ctime>
 #include <optional>
-#include <system_error>
-#include <thread>
 #include <utility>
 
 #include "gpio_chip.hpp"
@@ -77,7 +75,8 @@ struct GpioEncoder::Impl {
   std::string description;
 
   int wake_fd = -1;  // eventfd, non-blocking: a request, or the stop
-  std::thread reader;
+  pthread_t reader{};
+  bool reader_started = false;
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> requested{0};  // the loop's newest request
   std::atomic<std::uint64_t> answered{0};   // the request `answer` is for
@@ -106,11 +105,11 @@ struct GpioEncoder::Impl {
 };
 
 GpioEncoder::Impl::~Impl() {
-  if (reader.joinable()) {
+  if (reader_started) {
     stop.store(true, std::memory_order_release);
     const std::uint64_t one = 1;
     [[maybe_unused]] const auto written = ::write(wake_fd, &one, sizeof one);
-    reader.join();
+    ::pthread_join(reader, nullptr);
   }
   if (wake_fd >= 0) ::close(wake_fd);
 }
@@ -118,12 +117,25 @@ GpioEncoder::Impl::~Impl() {
 int GpioEncoder::Impl::start_level_reader() noexcept {
   wake_fd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (wake_fd < 0) return errno;
-  try {
-    reader = std::thread([this] { run_level_reader(); });
-  } catch (const std::system_error& failure) {
-    return failure.code().value();
+  // A small stack: RealtimeLoop's mlockall locks every mapped page, a thread's whole stack too, and glibc's default
+  // is RLIMIT_STACK (8 MiB) where this thread needs a few KiB for a poll and two ioctls.
+  const std::size_t stack =
+      std::max<std::size_t>(128 * 1024, static_cast<std::size_t>(::sysconf(_SC_THREAD_STACK_MIN)));
+  pthread_attr_t attr;
+  if (const int err = ::pthread_attr_init(&attr); err != 0) return err;
+  int err = ::pthread_attr_setstacksize(&attr, stack);
+  if (err == 0) {
+    err = ::pthread_create(
+        &reader, &attr,
+        [](void* self) -> void* {
+          static_cast<Impl*>(self)->run_level_reader();
+          return nullptr;
+        },
+        this);
   }
-  return 0;
+  ::pthread_attr_destroy(&attr);
+  reader_started = err == 0;
+  return err;
 }
 
 void GpioEncoder::Impl::run_level_reader() noexcept {
