@@ -213,11 +213,8 @@ std::optional<std::string> run_loop_round(const board::RealtimeConfig& config, s
   return std::nullopt;
 }  // the loop gives back its scheduling and memory before cyclictest runs
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Wake-up latency of the real-time loop beside cyclictest's, same period and priority; prints JSON."};
-  app.name("lever-bench-loop");
+// What the command line asks for.
+struct Options {
   double seconds = 10.0;
   std::int64_t period_us = 1000;
   int priority = 80;
@@ -227,86 +224,97 @@ int main(int argc, char** argv) {
   bool no_lock = false;
   bool tunes_pm = false;
   int rounds = 4;
-  app.add_option("--seconds", seconds, "how long each of the two, in all")
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--seconds", o.seconds, "how long each of the two, in all")
       ->check(CLI::Range(0.1, 3600.0))
       ->default_str("10");
-  app.add_option("--rounds", rounds, "alternations of the loop and cyclictest (ABBA...)")
+  app.add_option("--rounds", o.rounds, "alternations of the loop and cyclictest (ABBA...)")
       ->check(CLI::Range(1, 100))
       ->default_str("4");
-  app.add_option("--period-us", period_us, "loop period")->check(CLI::Range(50, 1'000'000))->default_str("1000");
-  app.add_option("--priority", priority, "SCHED_FIFO priority, 0 for none")
+  app.add_option("--period-us", o.period_us, "loop period")->check(CLI::Range(50, 1'000'000))->default_str("1000");
+  app.add_option("--priority", o.priority, "SCHED_FIFO priority, 0 for none")
       ->check(CLI::Range(0, 99))
       ->default_str("80");
-  app.add_option("--cpus", cpus_text, "CPU list for both, as taskset takes it (\"1\", \"0,2-3\")");
-  app.add_option("--step", step_kind, "what the loop runs: pair (an HSI/TOP pair of the core) or trivial")
+  app.add_option("--cpus", o.cpus_text, "CPU list for both, as taskset takes it (\"1\", \"0,2-3\")");
+  app.add_option("--step", o.step_kind, "what the loop runs: pair (an HSI/TOP pair of the core) or trivial")
       ->check(CLI::IsMember({"pair", "trivial"}))
       ->default_str("pair");
-  app.add_option("--cyclictest", cyclictest, "the cyclictest program")->default_str("cyclictest");
-  app.add_flag("--no-mlock", no_lock, "lock no memory, in either");
-  app.add_flag("--cyclictest-tunes-pm", tunes_pm,
+  app.add_option("--cyclictest", o.cyclictest, "the cyclictest program")->default_str("cyclictest");
+  app.add_flag("--no-mlock", o.no_lock, "lock no memory, in either");
+  app.add_flag("--cyclictest-tunes-pm", o.tunes_pm,
                "let cyclictest hold /dev/cpu_dma_latency at 0, as it does by default");
-  CLI11_PARSE(app, argc, argv);
+}
 
+// The loop's configuration from the options; empty when --cpus is no CPU list.
+std::optional<board::RealtimeConfig> loop_config(const Options& o) {
   board::RealtimeConfig config;
-  config.period = std::chrono::microseconds(period_us);
-  config.fifo_priority = priority;
-  config.lock_memory = !no_lock;
-  if (!cpus_text.empty()) {
-    const auto cpus = board::parse_cpu_list(cpus_text);
-    if (!cpus) {
-      std::fprintf(stderr, "lever-bench-loop: --cpus \"%s\" is no CPU list\n", cpus_text.c_str());
-      return 2;
-    }
+  config.period = std::chrono::microseconds(o.period_us);
+  config.fifo_priority = o.priority;
+  config.lock_memory = !o.no_lock;
+  if (!o.cpus_text.empty()) {
+    const auto cpus = board::parse_cpu_list(o.cpus_text);
+    if (!cpus) return std::nullopt;
     config.cpus = *cpus;
   }
-  const auto periods = static_cast<std::uint64_t>(seconds * 1e6 / static_cast<double>(period_us) / rounds);
-  const bool with_pair = step_kind == "pair";
+  return config;
+}
 
-  // Rounds in the order ABBA..., so that a machine that gets busier or quieter over the run weighs on both alike.
+// Both sides of the comparison, as measured.
+struct Measured {
   RunnerTotals runner;
   LatencyHistogram reference;
   std::string reference_error, command;
+};
+
+// Rounds in the order ABBA..., so that a machine that gets busier or quieter over the run weighs on both alike. An
+// error of the loop's own ends the run (returned); cyclictest's is kept in the result, and it is not run again.
+std::optional<std::string> run_rounds(const Options& o, const board::RealtimeConfig& config, Measured& m) {
+  const auto periods = static_cast<std::uint64_t>(o.seconds * 1e6 / static_cast<double>(o.period_us) / o.rounds);
+  const bool with_pair = o.step_kind == "pair";
   bool warned = false;
-  for (int round = 0; round < rounds; ++round) {
+  for (int round = 0; round < o.rounds; ++round) {
     for (int half = 0; half < 2; ++half) {
       const bool loop_now = (half == 0) == (round % 2 == 0);
       if (loop_now) {
-        if (const auto error = run_loop_round(config, periods, with_pair, runner)) {
-          std::fprintf(stderr, "lever-bench-loop: %s\n", error->c_str());
-          return 2;
-        }
-        if (!runner.privileged && !warned) {
-          std::fprintf(stderr, "lever-bench-loop: %s\n", runner.warning.c_str());
+        if (auto error = run_loop_round(config, periods, with_pair, m.runner)) return error;
+        if (!m.runner.privileged && !warned) {
+          std::fprintf(stderr, "lever-bench-loop: %s\n", m.runner.warning.c_str());
           warned = true;
         }
-      } else if (reference_error.empty()) {
+      } else if (m.reference_error.empty()) {
         // As the loop was granted (it runs first): unprivileged, cyclictest would refuse to start at all.
-        const CyclictestRun run = run_cyclictest(cyclictest, period_us, periods, runner.granted_priority,
-                                                 runner.memory_locked, config.cpus, tunes_pm);
-        command.clear();
-        for (const auto& a : run.argv) command += (command.empty() ? "" : " ") + a;
+        const CyclictestRun run = run_cyclictest(o.cyclictest, o.period_us, periods, m.runner.granted_priority,
+                                                 m.runner.memory_locked, config.cpus, o.tunes_pm);
+        m.command.clear();
+        for (const auto& a : run.argv) m.command += (m.command.empty() ? "" : " ") + a;
         if (run.histogram) {
-          reference.add(*run.histogram);
+          m.reference.add(*run.histogram);
         } else {
-          reference_error = run.error;
+          m.reference_error = run.error;
         }
       }
     }
   }
+  return std::nullopt;
+}
 
+Json report(const Options& o, const board::RealtimeConfig& config, const Measured& m) {
+  const RunnerTotals& runner = m.runner;
+  const bool with_pair = o.step_kind == "pair";
   Json out;
-  out["period_us"] = period_us;
-  out["priority"] = priority;
-  out["seconds"] = seconds;
-  out["rounds"] = rounds;
+  out["period_us"] = o.period_us;
+  out["priority"] = o.priority;
+  out["seconds"] = o.seconds;
+  out["rounds"] = o.rounds;
   out["step"] = with_pair ? "HSI/TOP pair of the firmware core, in-memory HAL" : "trivial";
   out["runner_us"] = figures(runner.latency);
   const Json minor_faults = runner.minor_faults ? Json(*runner.minor_faults) : Json(nullptr);
-  int exit_code = 0;
-  if (reference_error.empty()) {
+  if (m.reference_error.empty()) {
     const std::uint64_t runner_p99 = runner.latency.percentile_us(0.99);
-    const std::uint64_t reference_p99 = reference.percentile_us(0.99);
-    out["cyclictest_us"] = figures(reference);
+    const std::uint64_t reference_p99 = m.reference.percentile_us(0.99);
+    out["cyclictest_us"] = figures(m.reference);
     out["ratio_p99"] =
         reference_p99 > 0 ? Json(static_cast<double>(runner_p99) / static_cast<double>(reference_p99)) : Json(nullptr);
     out["goals"] = {{"p99_within_1_5x_cyclictest",
@@ -314,8 +322,7 @@ int main(int argc, char** argv) {
                     {"no_minor_faults_steady", minor_faults == 0}};
   } else {
     out["cyclictest_us"] = nullptr;
-    out["cyclictest_error"] = reference_error;
-    exit_code = 1;
+    out["cyclictest_error"] = m.reference_error;
   }
   out["minor_faults_steady"] = minor_faults;
   out["major_faults_steady"] = runner.major_faults ? Json(*runner.major_faults) : Json(nullptr);
@@ -340,7 +347,29 @@ int main(int argc, char** argv) {
   out["granted"] = runner.granted;
   out["cpus"] = cpu_list_text(config.cpus);
   out["mlock"] = config.lock_memory;
-  out["cyclictest_command"] = command;
-  std::printf("%s\n", out.dump(2).c_str());
-  return exit_code;
+  out["cyclictest_command"] = m.command;
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Wake-up latency of the real-time loop beside cyclictest's, same period and priority; prints JSON."};
+  app.name("lever-bench-loop");
+  Options options;
+  add_options(app, options);
+  CLI11_PARSE(app, argc, argv);
+
+  const auto config = loop_config(options);
+  if (!config) {
+    std::fprintf(stderr, "lever-bench-loop: --cpus \"%s\" is no CPU list\n", options.cpus_text.c_str());
+    return 2;
+  }
+  Measured measured;
+  if (const auto error = run_rounds(options, *config, measured)) {
+    std::fprintf(stderr, "lever-bench-loop: %s\n", error->c_str());
+    return 2;
+  }
+  std::printf("%s\n", report(options, *config, measured).dump(2).c_str());
+  return measured.reference_error.empty() ? 0 : 1;
 }

@@ -41,6 +41,80 @@ void check_cutoff(const lever::tool::Trace& trace, double filter_hz) {
                     program::short_number(rate / 2), program::short_number(rate), program::short_number(filter_hz)));
 }
 
+// lever-codec --in --out: the codec over a recorded trace.
+struct RunOptions {
+  lever::codec::Config<double> config;
+  std::string input, output;
+};
+
+void add_run_options(CLI::App& app, RunOptions& o) {
+  lever::codec_cli::add_options(app, o.config, kTrace, lever::codec_cli::kOffline);
+  app.add_option("--in", o.input, "input trace CSV ('-': stdin)")->check(program::path());
+  app.add_option("--out", o.output, "output CSV, written atomically ('-': stdout)")->check(program::path());
+}
+
+// lever-codec generate: an example trace.
+struct GenerateCommand {
+  CLI::App* app = nullptr;
+  lever::tool::GeneratorOptions options;
+  std::string out;
+};
+
+void add_generate_command(CLI::App& app, GenerateCommand& g) {
+  g.app = app.add_subcommand("generate", "write an example trace from simple physics");
+  static const auto kinds = program::choices_of(lever::tool::kAllTraceKinds);
+  g.app
+      ->add_option("--kind", g.options.kind,
+                   "velocity: lever tapping a wall, encoder-differenced velocity [rad/s]; "
+                   "force: its contact force through a strain gauge [N]; force3: 3-DoF sphere contact [N]")
+      ->transform(program::one_of(kinds))
+      ->required();
+  g.app->add_option("--seed", g.options.seed, "random seed")->check(program::seed())->default_str("1");
+  g.app->add_option("--duration", g.options.duration_s, "seconds of trace at 1 kHz")
+      ->check(program::number({0.001, 3600.0, false, false, "a duration in seconds"}))
+      ->default_str("10");
+  g.app->add_option("--out", g.out, "output trace CSV, written atomically ('-': stdout)")
+      ->required()
+      ->check(program::path());
+  g.app->footer(program::kExitCodesHelp);
+}
+
+int generate(const GenerateCommand& g) {
+  program::OutputFile out(g.out, "--out");
+  const auto trace = lever::tool::generate_trace(g.options);
+  lever::tool::write_trace_csv(trace, [&out](std::string_view chunk) { out.write(chunk); });
+  out.commit();
+  fmt::print(out.is_stdout() ? stderr : stdout, "{}\n",
+             nlohmann::json{{"out", g.out}, {"samples", trace.samples()}, {"dof", trace.dof}, {"seed", g.options.seed}}
+                 .dump());
+  return 0;
+}
+
+int run(const RunOptions& o) {
+  if (o.input.empty() || o.output.empty()) return fail(program::kBadInput, "--in and --out are required (see --help)");
+  program::OutputFile out(o.output, "--out", {o.input});
+  const auto trace = lever::tool::read_trace(o.input);
+  check_cutoff(trace, o.config.filter_hz);
+  const auto result = lever::tool::run_codec(trace, o.config, [&out](std::string_view chunk) { out.write(chunk); });
+  out.commit();
+  const nlohmann::json summary{
+      {"samples", result.samples},
+      {"sent", result.sent},
+      {"rate", static_cast<double>(result.sent) / static_cast<double>(result.samples)},
+      {"rmse", result.rmse},
+      {"max_error", result.max_error},
+      {"dof", trace.dof},
+      {"mode", std::string(lever::codec::name(o.config.mode))},
+      {"p", o.config.p},
+      {"floor", o.config.floor},
+      {"filter_hz", o.config.filter_hz},
+      {"in", o.input},
+      {"out", o.output},
+  };
+  fmt::print(out.is_stdout() ? stderr : stdout, "{}\n", summary.dump());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -50,72 +124,15 @@ int main(int argc, char** argv) {
       "Writes one row per sample (t,sent,x_hat[,y_hat,z_hat]) and prints a JSON summary on stdout (on stderr\n"
       "when --out is '-', stdout)."};
   program::describe(app, "lever-codec");
-
-  lever::codec::Config<double> config;
-  std::string input, output;
-  lever::codec_cli::add_options(app, config, kTrace, lever::codec_cli::kOffline);
-  app.add_option("--in", input, "input trace CSV ('-': stdin)")->check(program::path());
-  app.add_option("--out", output, "output CSV, written atomically ('-': stdout)")->check(program::path());
-
-  auto* generate = app.add_subcommand("generate", "write an example trace from simple physics");
-  lever::tool::GeneratorOptions gen;
-  std::string gen_out;
-  const program::Choices<lever::tool::TraceKind> kinds{{"velocity", lever::tool::TraceKind::velocity},
-                                                       {"force", lever::tool::TraceKind::force},
-                                                       {"force3", lever::tool::TraceKind::force3}};
-  generate
-      ->add_option("--kind", gen.kind,
-                   "velocity: lever tapping a wall, encoder-differenced velocity [rad/s]; "
-                   "force: its contact force through a strain gauge [N]; force3: 3-DoF sphere contact [N]")
-      ->transform(program::one_of(kinds))
-      ->required();
-  generate->add_option("--seed", gen.seed, "random seed")->check(program::seed())->default_str("1");
-  generate->add_option("--duration", gen.duration_s, "seconds of trace at 1 kHz")
-      ->check(program::number({0.001, 3600.0, false, false, "a duration in seconds"}))
-      ->default_str("10");
-  generate->add_option("--out", gen_out, "output trace CSV, written atomically ('-': stdout)")
-      ->required()
-      ->check(program::path());
-  generate->footer(program::kExitCodesHelp);
+  RunOptions run_options;
+  add_run_options(app, run_options);
+  GenerateCommand generate_command;
+  add_generate_command(app, generate_command);
   app.require_subcommand(0, 1);
-
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
 
   try {
-    if (generate->parsed()) {
-      program::OutputFile out(gen_out, "--out");
-      const auto trace = lever::tool::generate_trace(gen);
-      lever::tool::write_trace_csv(trace, [&out](std::string_view chunk) { out.write(chunk); });
-      out.commit();
-      fmt::print(out.is_stdout() ? stderr : stdout, "{}\n",
-                 nlohmann::json{{"out", gen_out}, {"samples", trace.samples()}, {"dof", trace.dof}, {"seed", gen.seed}}
-                     .dump());
-      return 0;
-    }
-    if (input.empty() || output.empty()) return fail(program::kBadInput, "--in and --out are required (see --help)");
-
-    program::OutputFile out(output, "--out", {input});
-    const auto trace = lever::tool::read_trace(input);
-    check_cutoff(trace, config.filter_hz);
-    const auto run = lever::tool::run_codec(trace, config, [&out](std::string_view chunk) { out.write(chunk); });
-    out.commit();
-
-    const nlohmann::json summary{
-        {"samples", run.samples},
-        {"sent", run.sent},
-        {"rate", static_cast<double>(run.sent) / static_cast<double>(run.samples)},
-        {"rmse", run.rmse},
-        {"max_error", run.max_error},
-        {"dof", trace.dof},
-        {"mode", std::string(lever::codec::name(config.mode))},
-        {"p", config.p},
-        {"floor", config.floor},
-        {"filter_hz", config.filter_hz},
-        {"in", input},
-        {"out", output},
-    };
-    fmt::print(out.is_stdout() ? stderr : stdout, "{}\n", summary.dump());
-    return 0;
+    return generate_command.app->parsed() ? generate(generate_command) : run(run_options);
   } catch (const lever::tool::TraceError& e) {
     return fail(program::kBadInput, e.what());
   } catch (const program::BadInput& e) {

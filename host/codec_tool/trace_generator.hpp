@@ -14,6 +14,10 @@ enum class TraceKind {
   force,     // the same lever's contact force through a noisy 16-bit strain gauge
   force3,    // 3-DoF contact force of a cursor exploring a virtual sphere (paper eq. 11)
 };
+inline constexpr TraceKind kAllTraceKinds[] = {TraceKind::velocity, TraceKind::force, TraceKind::force3};
+constexpr std::string_view name(TraceKind k) {
+  return k == TraceKind::velocity ? "velocity" : k == TraceKind::force ? "force" : "force3";
+}
 
 struct GeneratorOptions {
   TraceKind kind = TraceKind::velocity;
