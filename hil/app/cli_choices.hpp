@@ -5,12 +5,13 @@
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
 #include "lever/program/choices.hpp"
+#include "scenario_option.hpp"
 #include "sweep.hpp"
 
 namespace lever::hil {
 
 // Each from its enum's own table and names, next to the type.
-inline const program::Choices<ScenarioKind> kScenarios = program::choices_of(kAllScenarios);
+inline const program::Choices<ScenarioOption> kScenarios = program::choices_of(kAllScenarioOptions);
 inline const program::Choices<Topology> kTopologies = program::choices_of(kAllTopologies);
 inline const program::Choices<fw::MotionVelocity> kMotionVelocities = program::choices_of(fw::kAllMotionVelocities);
 inline const program::Choices<SphereVelocityChain> kDeviceVelocities = program::choices_of(kAllVelocityChains);

@@ -75,7 +75,7 @@ SweepCommand add_sweep_command(CLI::App& app, SweepOptions& o) {
   cmd.p = cmd.app->get_option("--p");
   cmd.app->add_option("--scenario", o.scenario, "scenario")
       ->transform(program::one_of(kScenarios))
-      ->default_str(std::string(name(ScenarioKind::wall_tap)));
+      ->default_str(std::string(name(ScenarioOption::wall_tap)));
   cmd.app->add_option("--out", o.out_dir, "output directory")->required()->check(program::path());
   cmd.app->add_option("--seeds", o.seeds, "seeds per point")->check(program::whole(1, 100))->default_str("3");
   cmd.app->add_option("--duration", o.duration_s, "simulated seconds per run")
@@ -111,7 +111,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
       ->check(CLI::ExistingFile);
   serve->add_option("--scenario", o.scenario, "wall-tap (the paper's task), free-motion or press-hold")
       ->transform(program::one_of(kScenarios))
-      ->default_str(std::string(name(ScenarioKind::wall_tap)));
+      ->default_str(std::string(name(ScenarioOption::wall_tap)));
   serve
       ->add_option("--duration", o.duration_s,
                    "seconds of scenario once both levers are armed (0: until SIGINT or SIGTERM)")
@@ -140,8 +140,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& o) {
 
 int run_command(const RunOptions& o) {
   SimConfig config = run_config(o);
-  if (config.scenario == ScenarioKind::sphere_3dof)
-    return run_sphere_command(sphere_config_from(config, o), o.json, o.trace);
+  if (!lever_scenario(o.scenario)) return run_sphere_command(sphere_config_from(config, o), o.json, o.trace);
   // The trace streams to its file as the run goes: an hour of it is 1 GB, never held whole.
   std::optional<program::OutputFile> trace;
   if (!o.trace.empty()) {
@@ -161,7 +160,7 @@ int run_command(const RunOptions& o) {
 }
 
 int serve_command(const ServeOptions& o) {
-  if (o.scenario == ScenarioKind::sphere_3dof)
+  if (!lever_scenario(o.scenario))
     throw std::invalid_argument("serve plays the levers' world; sphere-3dof has no levers (use run)");
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
@@ -177,7 +176,7 @@ int sweep_command(const SweepOptions& o, const SweepCommand& cmd) {
     if (cmd.topology->count() > 0 || cmd.force_loop->count() > 0)
       throw std::invalid_argument(
           "--topology and --hsi-force-loop belong to sweep --over p (--over delay runs two sites, open loop)");
-    if (o.scenario != ScenarioKind::wall_tap)
+    if (o.scenario != ScenarioOption::wall_tap)
       throw std::invalid_argument("sweep --over delay runs wall-tap only (the contact is what delay destabilizes)");
     auto sorted = o.delays_ms;
     std::sort(sorted.begin(), sorted.end());
@@ -187,7 +186,7 @@ int sweep_command(const SweepOptions& o, const SweepCommand& cmd) {
   }
   if (cmd.delays->count() > 0 || cmd.p->count() > 0)
     throw std::invalid_argument("--delays-ms and --p belong to sweep --over delay (--over p sweeps p itself)");
-  if (o.scenario == ScenarioKind::sphere_3dof) {
+  if (!lever_scenario(o.scenario)) {
     if (cmd.topology->count() > 0 || cmd.force_loop->count() > 0)
       throw std::invalid_argument(
           "--topology and --hsi-force-loop belong to the lever scenarios (sphere-3dof has none)");

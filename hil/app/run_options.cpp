@@ -46,10 +46,10 @@ int averaging_for(double rate_hz) {
 
 // The scenario, its length and seed.
 void add_scenario_options(CLI::App& cmd, RunOptions& o) {
-  cmd.add_option("--scenario", o.config.scenario,
+  cmd.add_option("--scenario", o.scenario,
                  "wall-tap (the paper's task), free-motion, press-hold or sphere-3dof (the paper's 3-DoF experiment)")
       ->transform(program::one_of(kScenarios))
-      ->default_str(std::string(name(ScenarioKind::wall_tap)));
+      ->default_str(std::string(name(ScenarioOption::wall_tap)));
   cmd.add_option("--duration", o.config.duration_s, "simulated seconds")
       ->check(program::number(kRunSeconds))
       ->default_str("20");
@@ -263,7 +263,7 @@ void add_run_options(CLI::App& cmd, RunOptions& o) {
 }
 
 std::string misplaced_options(const RunOptions& o) {
-  const bool sphere = o.config.scenario == ScenarioKind::sphere_3dof;
+  const bool sphere = !lever_scenario(o.scenario);
   if (sphere && (o.encoder_counts || o.encoder_interface || o.hsi_force_loop))
     return "--encoder-counts, --encoder-interface and --hsi-force-loop belong to the lever scenarios (sphere-3dof has "
            "no levers)";
@@ -287,6 +287,7 @@ std::string misplaced_options(const RunOptions& o) {
 
 SimConfig run_config(const RunOptions& o) {
   SimConfig c = o.config;
+  c.scenario = lever_scenario(o.scenario).value_or(c.scenario);
   c.velocity_codec = codec_cli::resolve(o.codec, o.velocity_codec);
   c.force_codec = codec_cli::resolve(o.codec, o.force_codec);
   if (const auto m = misplaced_options(o); !m.empty()) throw std::invalid_argument(m);

@@ -11,10 +11,12 @@
 #include "lever/hil/simulation.hpp"
 #include "lever/hil/sphere3dof.hpp"
 #include "lever/hil/strain_gauge_model.hpp"
+#include "scenario_option.hpp"
 
 namespace lever::hil {
 
 struct RunOptions {
+  ScenarioOption scenario = ScenarioOption::wall_tap;  // the lever scenarios' goes into config
   SimConfig config;
   codec::Config<double> codec;                       // --mode, --p, --filter-hz: both directions
   codec_cli::Overrides velocity_codec, force_codec;  // --*-velocity, --*-force: one direction each

@@ -8,13 +8,14 @@
 #include <string>
 
 #include "lever/hil/human_operator.hpp"
+#include "scenario_option.hpp"
 #include "serve_probe.hpp"
 
 namespace lever::hil {
 
 struct ServeOptions {
-  std::string hsi_config, top_config;  // the levers' lever-fw configuration files
-  ScenarioKind scenario = ScenarioKind::wall_tap;
+  std::string hsi_config, top_config;                  // the levers' lever-fw configuration files
+  ScenarioOption scenario = ScenarioOption::wall_tap;  // a lever scenario: serve refuses the sphere
   double duration_s = 20.0;      // scenario seconds from the moment the pair is armed; 0: until a signal
   double arm_timeout_s = 300.0;  // wall seconds to wait for the pair to be armed
   std::uint64_t seed = 1;        // power-up angles, operator, gauge noise

@@ -32,7 +32,7 @@ std::optional<ServePair> load_serve_pair(const ServeOptions& o) {
 
 SimConfig serve_sim_config(const ServeOptions& o, const ServePair& pair) {
   SimConfig sim;
-  sim.scenario = o.scenario;
+  sim.scenario = *lever_scenario(o.scenario);  // serve_command refused the sphere
   sim.duration_s = o.duration_s;
   sim.seed = o.seed;
   sim.velocity_codec = pair.hsi.lever.motion_codec;

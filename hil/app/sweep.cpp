@@ -141,7 +141,7 @@ int run_sweep(const SweepOptions& o) {
       [&](std::size_t i) {
         Job& job = jobs[i];
         SimConfig c;
-        c.scenario = o.scenario;
+        c.scenario = *lever_scenario(o.scenario);  // the sphere is sphere_sweep.cpp's
         c.duration_s = o.duration_s;
         c.seed = job.seed;
         const bool filter = job.variant->filter;

@@ -5,6 +5,7 @@
 #include "lever/codec/config.hpp"
 #include "lever/hil/human_operator.hpp"
 #include "lever/hil/simulation.hpp"
+#include "scenario_option.hpp"
 
 namespace lever::hil {
 
@@ -14,7 +15,7 @@ enum class SweepAxis { p, delay };
 
 struct SweepOptions {
   SweepAxis over = SweepAxis::p;
-  ScenarioKind scenario = ScenarioKind::wall_tap;
+  ScenarioOption scenario = ScenarioOption::wall_tap;
   std::string out_dir;
   int seeds = 3;
   double duration_s = 20.0;

@@ -23,8 +23,6 @@ double minimum_jerk_rate(double tau) {
 HumanOperator::HumanOperator(const OperatorParams& p, ScenarioKind scenario, double wall_angle, double start_angle,
                              std::uint64_t seed)
     : p_(p), scenario_(scenario), wall_(wall_angle), rng_(seed), intent_angle_(start_angle) {
-  if (scenario == ScenarioKind::sphere_3dof)
-    throw std::invalid_argument("sphere-3dof has no lever: lever::hil::run_sphere runs it");
   if (!(p.speed_factor > 0.0) || !std::isfinite(p.speed_factor) || !(p.dwell_factor >= 0.0) ||
       !std::isfinite(p.dwell_factor))
     throw std::invalid_argument("the operator's speed factor must be > 0 and its dwell factor >= 0");
@@ -99,7 +97,6 @@ Segment HumanOperator::next_segment() {
           return move(rng_.uniform(0.05, 0.15), move_s, dwell);
         }
       }
-    case ScenarioKind::sphere_3dof:  // refused by the constructor
     case ScenarioKind::wall_tap:
       // The paper's 1-DoF task: feel the wall by tapping it and pressing against it.
       if (taps_left_ > 0) {

@@ -24,15 +24,13 @@ struct OperatorParams {
   double dwell_factor = 1.0;
 };
 
-// sphere_3dof is the paper's 3-DoF experiment: no lever, no HumanOperator (lever/hil/sphere3dof.hpp).
-enum class ScenarioKind : std::uint8_t { wall_tap, free_motion, press_hold, sphere_3dof };
+// The operator's scripts on the levers. The paper's 3-DoF experiment has no lever and a simulator of its own
+// (lever/hil/sphere3dof.hpp); lever-hil's --scenario names both (hil/app/scenario_option.hpp).
+enum class ScenarioKind : std::uint8_t { wall_tap, free_motion, press_hold };
 inline constexpr ScenarioKind kAllScenarios[] = {ScenarioKind::wall_tap, ScenarioKind::free_motion,
-                                                 ScenarioKind::press_hold, ScenarioKind::sphere_3dof};
+                                                 ScenarioKind::press_hold};
 constexpr std::string_view name(ScenarioKind k) {
-  return k == ScenarioKind::wall_tap      ? "wall-tap"
-         : k == ScenarioKind::free_motion ? "free-motion"
-         : k == ScenarioKind::press_hold  ? "press-hold"
-                                          : "sphere-3dof";
+  return k == ScenarioKind::wall_tap ? "wall-tap" : k == ScenarioKind::free_motion ? "free-motion" : "press-hold";
 }
 
 // One piece of intent.
