@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # An image test: this tree's packages (scripts/package), the board image with them installed and the test's files
-# added (scripts/board-image, its base cached), booted in virtual time (tools/board-image/boot), where
+# added (tools/board-image/build, its base cached), booted in virtual time (tools/board-image/boot), where
 # lever-image-test.service runs tests/image/SCRIPT. Exits with the test's status; each step's wall time printed.
 # usage: run.sh [--arch arm64] BUILD_DIR SOURCE_DIR SCRIPT [BOOT_OPTION...]
 #   --arch arm64  the arm64 board: the packages of BUILD_DIR/cross/arm64 (the tree of the cross test, built)
@@ -25,7 +25,7 @@ cp -a "$source/tests/kernel" "$source/tests/image" "$lib/tests/"
 cp -a "$source/tools/kernel-rig/gpio-sim-chip" "$lib/tools/kernel-rig/"
 cp -a "$source/firmware/config" "$lib/firmware/"
 t=$SECONDS
-"$source/scripts/board-image" --add "$work/add" "$arch" "$work/dist" "$work/image" >/dev/null
+"$source/tools/board-image/build" --add "$work/add" "$arch" "$work/dist" "$work/image" >/dev/null
 echo "image test: board image in $((SECONDS - t)) s ($(tr '\n' ';' <"$work/image/times"))"
 t=$SECONDS
 status=0
