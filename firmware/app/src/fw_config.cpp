@@ -34,6 +34,121 @@ void bind_codec(program::ConfigSchema& s, const std::string& section, codec::Con
   s.number(section + ".filter_hz", c.filter_hz, 0.0, 500.0, "Hz", "prefilter cut-off, below Nyquist (0: off)");
 }
 
+void bind_lever(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.choice("lever.role", l.role, {{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}},
+           "HSI: the operator's lever; TOP: the lever at the wall");
+  s.integer("lever.pair", l.pair, 0, protocol::kPairCount - 1, "", "lever pair, selects the CAN ids");
+}
+
+void bind_link(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.integer("link.heartbeat_ms", l.heartbeat_period, 1, 1000, "ms", "heartbeat period");
+  s.integer("link.comms_timeout_ms", l.comms_timeout, 1, 60000, "ms", "peer silent this long latches COMMS");
+  s.integer("link.refresh_ms", l.refresh_period, 1, 30000, "ms", "a data frame at least this often");
+  s.integer("link.rest_repeat_ms", l.rest_repeat, 0, 30000, "ms",
+            "a frame that brings a stream to rest is sent again this much later (0: never)");
+}
+
+void bind_codecs(program::ConfigSchema& s, fw::LeverConfig& l) {
+  bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
+  s.choice("codec.motion.velocity", l.motion_velocity,
+           {{fw::name(fw::MotionVelocity::difference), fw::MotionVelocity::difference},
+            {fw::name(fw::MotionVelocity::estimate), fw::MotionVelocity::estimate}},
+           "HSI sends the quantized position's backward difference (the paper's; 0 at rest) or the velocity estimate");
+  bind_codec(s, "codec.force", l.force_codec, "N");
+}
+
+void bind_encoder_and_velocity(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.number("encoder.counts_per_rev", l.counts_per_rev, 1.0, 1e8, "counts", "counts per turn (lines x4)");
+  s.integer("encoder.counter_bits", l.counter_bits, 8, 32, "bits", "width of a hardware counter");
+  s.integer("encoder.illegal_threshold", l.decoder.illegal_threshold, 0, 1000000, "",
+            "illegal transitions tolerated before ENCODER latches");
+  s.choice("velocity.method", l.velocity.method,
+           {{"tracking_loop", fw::VelocityMethod::tracking_loop},
+            {"backward_difference", fw::VelocityMethod::backward_difference}},
+           "velocity estimate");
+  s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0, 2000.0, "rad/s", "tracking loop bandwidth");
+}
+
+void bind_force_gauge(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.number("gauge.newton_per_unit", l.gauge.newton_per_count, 1e-12, 1e6, "N",
+           "newtons per amplifier unit (ADC count, or 1 when the amplifier reports newtons)");
+  s.number("gauge.offset", l.gauge.offset_counts, -1e12, 1e12, "units", "zero-force reading, replaced by a tare");
+  s.number("gauge.raw_min", l.gauge.raw_min, -1e12, 1e12, "units", "readings at or below are saturated");
+  s.number("gauge.raw_max", l.gauge.raw_max, -1e12, 1e12, "units", "readings at or above are saturated");
+  s.integer("gauge.stale_ms", l.gauge.stale_after, 1, 10000, "ms", "an older reading gives no force at all");
+  s.integer("gauge.tare_samples", l.gauge.tare_samples, 1, 10000, "", "fresh readings averaged by a tare");
+  s.boolean("gauge.used", l.use_force_sensor, "the lever reads its gauge (TOP: always; HSI: closed-loop display)");
+}
+
+void bind_homing(program::ConfigSchema& s, fw::LeverConfig& l) {
+  auto& h = l.homing;
+  s.choice("homing.method", h.method,
+           {{"absolute", fw::HomingMethod::absolute},
+            {"hard_stop", fw::HomingMethod::hard_stop},
+            {"index", fw::HomingMethod::index}},
+           "absolute encoder, or home against the end stop, or at the index line");
+  s.number("homing.direction", h.direction, -1.0, 1.0, "", "-1 or +1: where the stop or index is");
+  s.number("homing.speed_rad_s", h.speed_rad_s, 1e-3, 10.0, "rad/s", "homing speed");
+  s.number("homing.kp_nms", h.kp_nms, 0.0, 10.0, "N m s/rad", "homing velocity loop, proportional");
+  s.number("homing.ki_nm", h.ki_nm, 0.0, 100.0, "N m/rad", "homing velocity loop, integral");
+  s.number("homing.torque_limit_nm", h.torque_limit_nm, 1e-3, 10.0, "N m", "never more while homing");
+  s.number("homing.stall_speed_rad_s", h.stall_speed_rad_s, 1e-4, 10.0, "rad/s",
+           "slower than this at the torque limit...");
+  s.integer("homing.stall_ms", h.stall_ticks, 1, 10000, "ms", "...this long is the stop");
+  s.number("homing.home_position_rad", h.home_position_rad, -100.0, 100.0, "rad", "position of the stop or index");
+  s.number("homing.max_travel_rad", h.max_travel_rad, 1e-3, 100.0, "rad", "give up after this much travel");
+  s.integer("homing.timeout_ms", h.timeout_ticks, 1, 600000, "ms", "give up after this long");
+}
+
+void bind_timing(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.number("timing.overrun_periods", l.timing.overrun_periods, 1.0, 100.0, "periods",
+           "a longer step interval is an overrun (counted)");
+  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms",
+            "a longer step interval latches TIMING; so does more than fault_after_ms - 1 lost in a window");
+  s.integer("timing.window_ms", l.timing.window, 1, fw::StepTiming::kMaxWindow, "ms",
+            "lost time (late intervals less a period, long steps) is summed over any window this long");
+  s.integer("timing.long_step_us", l.timing.long_step_us, 1, 1000000, "us",
+            "a step longer than this counts its whole duration as lost time");
+}
+
+void bind_control(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
+  s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");
+  s.number("control.position.kff_nms", l.position.kff_velocity, 0.0, 100.0, "N m s/rad", "velocity feed-forward");
+  s.number("control.position.approach_speed_rad_s", l.position.approach_speed_rad_s, 1e-3, 100.0, "rad/s",
+           "after arming, the TOP walks to the HSI at most this fast");
+  s.number("control.display.lever_arm_m", l.display.lever_arm_m, 1e-3, 10.0, "m", "pivot to handle");
+  s.number("control.display.gain", l.display.gain, 0.0, 100.0, "", "force scaling TOP to HSI");
+  s.boolean("control.display.closed_loop", l.display.closed_loop, "PI on the HSI's own gauge");
+  s.number("control.display.kp", l.display.kp, 0.0, 100.0, "", "closed loop: per unit force error");
+  s.number("control.display.ki_per_s", l.display.ki, 0.0, 10000.0, "1/s", "closed loop: integral gain");
+  s.number("control.display.integral_limit_n", l.display.integral_limit_n, 0.0, 1000.0, "N", "integral clamp");
+  s.number("control.display.contact_damping_nms", l.display.contact_damping_nms, 0.0, 100.0, "N m s/rad",
+           "HSI damping while a contact force is displayed");
+  s.number("control.display.contact_threshold_n", l.display.contact_threshold_n, 0.0, 100.0, "N",
+           "displayed force above which the lever is in contact");
+  s.choice("control.passivity.mode", l.passivity.mode, program::choices_of(fw::kAllPassivityModes),
+           "time-domain passivity: off, observe (observer and energy frames only) or tdpa (the controller acts)");
+  s.number("control.passivity.drift_gain_per_s", l.passivity.drift_gain_per_s, 0.0, 999.0, "1/s",
+           "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
+  s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",
+           "of the port's own input, what it keeps for its own output (0: the literature's per-port TDPA)");
+  s.number("control.passivity.reserve_share", l.passivity.reserve_share, 0.0, 1.0, "",
+           "of each joule the port takes in, the share that may go to its reserve; the rest goes to the peer");
+  s.number("control.passivity.display_spend_time_s", l.passivity.display_spend_time_s, 0.0, 10.0, "s",
+           "HSI with tdpa: spend the port's energy over this time constant (0: all at once)");
+}
+
+void bind_safety(program::ConfigSchema& s, fw::LeverConfig& l) {
+  s.number("safety.torque_limit_nm", l.torque_limit_nm, 1e-3, 100.0, "N m", "never exceeded");
+  s.integer("safety.torque_saturation_ms", l.torque_saturation_ticks, 1, 60000, "ms",
+            "demand above the limit this long latches TORQUE_LIMIT");
+  s.number("safety.position_min_rad", l.position_min_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
+  s.number("safety.position_max_rad", l.position_max_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
+  s.number("safety.safe_hold_torque_nm", l.safe_hold_torque_nm, 0.0, 100.0, "N m", "TOP hold after a fault...");
+  s.integer("safety.safe_hold_ms", l.safe_hold_ticks, 0, 60000, "ms", "...for this long, then zero torque");
+}
+
 }  // namespace
 
 fw::LeverConfig board_lever_defaults() {
@@ -92,104 +207,15 @@ std::optional<RelationProblem> certain_fault_at_rest(const fw::LeverConfig& l) {
 
 program::ConfigSchema schema_for(FwConfig& config) {
   program::ConfigSchema s;
-  auto& l = config.lever;
-  s.choice("lever.role", l.role, {{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}},
-           "HSI: the operator's lever; TOP: the lever at the wall");
-  s.integer("lever.pair", l.pair, 0, protocol::kPairCount - 1, "", "lever pair, selects the CAN ids");
-
-  s.integer("link.heartbeat_ms", l.heartbeat_period, 1, 1000, "ms", "heartbeat period");
-  s.integer("link.comms_timeout_ms", l.comms_timeout, 1, 60000, "ms", "peer silent this long latches COMMS");
-  s.integer("link.refresh_ms", l.refresh_period, 1, 30000, "ms", "a data frame at least this often");
-  s.integer("link.rest_repeat_ms", l.rest_repeat, 0, 30000, "ms",
-            "a frame that brings a stream to rest is sent again this much later (0: never)");
-
-  bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
-  s.choice("codec.motion.velocity", l.motion_velocity,
-           {{fw::name(fw::MotionVelocity::difference), fw::MotionVelocity::difference},
-            {fw::name(fw::MotionVelocity::estimate), fw::MotionVelocity::estimate}},
-           "HSI sends the quantized position's backward difference (the paper's; 0 at rest) or the velocity estimate");
-  bind_codec(s, "codec.force", l.force_codec, "N");
-
-  s.number("encoder.counts_per_rev", l.counts_per_rev, 1.0, 1e8, "counts", "counts per turn (lines x4)");
-  s.integer("encoder.counter_bits", l.counter_bits, 8, 32, "bits", "width of a hardware counter");
-  s.integer("encoder.illegal_threshold", l.decoder.illegal_threshold, 0, 1000000, "",
-            "illegal transitions tolerated before ENCODER latches");
-  s.choice("velocity.method", l.velocity.method,
-           {{"tracking_loop", fw::VelocityMethod::tracking_loop},
-            {"backward_difference", fw::VelocityMethod::backward_difference}},
-           "velocity estimate");
-  s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0, 2000.0, "rad/s", "tracking loop bandwidth");
-
-  s.number("gauge.newton_per_unit", l.gauge.newton_per_count, 1e-12, 1e6, "N",
-           "newtons per amplifier unit (ADC count, or 1 when the amplifier reports newtons)");
-  s.number("gauge.offset", l.gauge.offset_counts, -1e12, 1e12, "units", "zero-force reading, replaced by a tare");
-  s.number("gauge.raw_min", l.gauge.raw_min, -1e12, 1e12, "units", "readings at or below are saturated");
-  s.number("gauge.raw_max", l.gauge.raw_max, -1e12, 1e12, "units", "readings at or above are saturated");
-  s.integer("gauge.stale_ms", l.gauge.stale_after, 1, 10000, "ms", "an older reading gives no force at all");
-  s.integer("gauge.tare_samples", l.gauge.tare_samples, 1, 10000, "", "fresh readings averaged by a tare");
-  s.boolean("gauge.used", l.use_force_sensor, "the lever reads its gauge (TOP: always; HSI: closed-loop display)");
-
-  auto& h = l.homing;
-  s.choice("homing.method", h.method,
-           {{"absolute", fw::HomingMethod::absolute},
-            {"hard_stop", fw::HomingMethod::hard_stop},
-            {"index", fw::HomingMethod::index}},
-           "absolute encoder, or home against the end stop, or at the index line");
-  s.number("homing.direction", h.direction, -1.0, 1.0, "", "-1 or +1: where the stop or index is");
-  s.number("homing.speed_rad_s", h.speed_rad_s, 1e-3, 10.0, "rad/s", "homing speed");
-  s.number("homing.kp_nms", h.kp_nms, 0.0, 10.0, "N m s/rad", "homing velocity loop, proportional");
-  s.number("homing.ki_nm", h.ki_nm, 0.0, 100.0, "N m/rad", "homing velocity loop, integral");
-  s.number("homing.torque_limit_nm", h.torque_limit_nm, 1e-3, 10.0, "N m", "never more while homing");
-  s.number("homing.stall_speed_rad_s", h.stall_speed_rad_s, 1e-4, 10.0, "rad/s",
-           "slower than this at the torque limit...");
-  s.integer("homing.stall_ms", h.stall_ticks, 1, 10000, "ms", "...this long is the stop");
-  s.number("homing.home_position_rad", h.home_position_rad, -100.0, 100.0, "rad", "position of the stop or index");
-  s.number("homing.max_travel_rad", h.max_travel_rad, 1e-3, 100.0, "rad", "give up after this much travel");
-  s.integer("homing.timeout_ms", h.timeout_ticks, 1, 600000, "ms", "give up after this long");
-
-  s.number("timing.overrun_periods", l.timing.overrun_periods, 1.0, 100.0, "periods",
-           "a longer step interval is an overrun (counted)");
-  s.integer("timing.fault_after_ms", l.timing.fault_after, 1, 1000, "ms",
-            "a longer step interval latches TIMING; so does more than fault_after_ms - 1 lost in a window");
-  s.integer("timing.window_ms", l.timing.window, 1, fw::StepTiming::kMaxWindow, "ms",
-            "lost time (late intervals less a period, long steps) is summed over any window this long");
-  s.integer("timing.long_step_us", l.timing.long_step_us, 1, 1000000, "us",
-            "a step longer than this counts its whole duration as lost time");
-
-  s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
-  s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");
-  s.number("control.position.kff_nms", l.position.kff_velocity, 0.0, 100.0, "N m s/rad", "velocity feed-forward");
-  s.number("control.position.approach_speed_rad_s", l.position.approach_speed_rad_s, 1e-3, 100.0, "rad/s",
-           "after arming, the TOP walks to the HSI at most this fast");
-  s.number("control.display.lever_arm_m", l.display.lever_arm_m, 1e-3, 10.0, "m", "pivot to handle");
-  s.number("control.display.gain", l.display.gain, 0.0, 100.0, "", "force scaling TOP to HSI");
-  s.boolean("control.display.closed_loop", l.display.closed_loop, "PI on the HSI's own gauge");
-  s.number("control.display.kp", l.display.kp, 0.0, 100.0, "", "closed loop: per unit force error");
-  s.number("control.display.ki_per_s", l.display.ki, 0.0, 10000.0, "1/s", "closed loop: integral gain");
-  s.number("control.display.integral_limit_n", l.display.integral_limit_n, 0.0, 1000.0, "N", "integral clamp");
-  s.number("control.display.contact_damping_nms", l.display.contact_damping_nms, 0.0, 100.0, "N m s/rad",
-           "HSI damping while a contact force is displayed");
-  s.number("control.display.contact_threshold_n", l.display.contact_threshold_n, 0.0, 100.0, "N",
-           "displayed force above which the lever is in contact");
-  s.choice("control.passivity.mode", l.passivity.mode, program::choices_of(fw::kAllPassivityModes),
-           "time-domain passivity: off, observe (observer and energy frames only) or tdpa (the controller acts)");
-  s.number("control.passivity.drift_gain_per_s", l.passivity.drift_gain_per_s, 0.0, 999.0, "1/s",
-           "TOP with tdpa: pull toward the HSI's position at this rate, within the energy the channel has");
-  s.number("control.passivity.reserve_j", l.passivity.reserve_j, 0.0, 999.0, "J",
-           "of the port's own input, what it keeps for its own output (0: the literature's per-port TDPA)");
-  s.number("control.passivity.reserve_share", l.passivity.reserve_share, 0.0, 1.0, "",
-           "of each joule the port takes in, the share that may go to its reserve; the rest goes to the peer");
-  s.number("control.passivity.display_spend_time_s", l.passivity.display_spend_time_s, 0.0, 10.0, "s",
-           "HSI with tdpa: spend the port's energy over this time constant (0: all at once)");
-
-  s.number("safety.torque_limit_nm", l.torque_limit_nm, 1e-3, 100.0, "N m", "never exceeded");
-  s.integer("safety.torque_saturation_ms", l.torque_saturation_ticks, 1, 60000, "ms",
-            "demand above the limit this long latches TORQUE_LIMIT");
-  s.number("safety.position_min_rad", l.position_min_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
-  s.number("safety.position_max_rad", l.position_max_rad, -100.0, 100.0, "rad", "allowed range, checked when homed");
-  s.number("safety.safe_hold_torque_nm", l.safe_hold_torque_nm, 0.0, 100.0, "N m", "TOP hold after a fault...");
-  s.integer("safety.safe_hold_ms", l.safe_hold_ticks, 0, 60000, "ms", "...for this long, then zero torque");
-
+  bind_lever(s, config.lever);
+  bind_link(s, config.lever);
+  bind_codecs(s, config.lever);
+  bind_encoder_and_velocity(s, config.lever);
+  bind_force_gauge(s, config.lever);
+  bind_homing(s, config.lever);
+  bind_timing(s, config.lever);
+  bind_control(s, config.lever);
+  bind_safety(s, config.lever);
   bind_board(s, config.board);
   return s;
 }
