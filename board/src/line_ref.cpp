@@ -13,10 +13,19 @@ LineRef LineRef::parse(std::string_view text) {
   if (digits) {
     unsigned value = 0;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec == std::errc{} && end == text.data() + text.size()) return offset(value);
+    if (ec == std::errc{} && end == text.data() + text.size()) {
+      LineRef line(value);
+      line.offset_text_ = text;
+      return line;
+    }
   }
   // Too many digits for an offset is no offset either; open() then reports no line of that name.
   return name(std::string(text));
+}
+
+std::string LineRef::text() const {
+  if (!is_offset()) return name_value();
+  return offset_text_.empty() ? std::to_string(offset_value()) : offset_text_;
 }
 
 std::string LineRef::describe() const {

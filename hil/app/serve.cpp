@@ -151,8 +151,8 @@ ServeSummary ServeLoop::finish(const SimConfig& sim) const {
 }
 
 void print_powered_up(const ServeWorld& world, const ServePair& pair) {
-  const auto& hsi_can = pair.hsi.board.can_interface;
-  const auto& top_can = pair.top.board.can_interface;
+  const auto& hsi_can = pair.hsi.board.can.interface;
+  const auto& top_can = pair.top.board.can.interface;
   fmt::print(stderr,
              "lever-hil serve: levers powered up at {:+.3f} rad (HSI) and {:+.3f} rad (TOP); waiting for both to be "
              "armed on {}{}\n",
@@ -177,7 +177,7 @@ int run_serve(const ServeOptions& o, const std::atomic<bool>& stop, ServeProbe* 
   if (!hsi) return program::kRuntimeFailure;
   auto top = open_devices(pair->top, world.top_angle(), o.max_edge_rate_hz);
   if (!top) return program::kRuntimeFailure;
-  auto watch = BusWatch::open(pair->hsi.board.can_interface, pair->top.board.can_interface, pair->hsi.lever.pair);
+  auto watch = BusWatch::open(pair->hsi.board.can.interface, pair->top.board.can.interface, pair->hsi.lever.pair);
   if (!watch) {
     fmt::print(stderr, "lever-hil serve: cannot watch the CAN bus: {}\n", watch.error().message);
     return program::kRuntimeFailure;

@@ -14,7 +14,7 @@ std::optional<LeverDevices> open_devices(const app::FwConfig& config, double ang
   const char* who = hsi ? "HSI" : "TOP";
   d.counts_per_radian = config.lever.counts_per_rev / (2.0 * std::numbers::pi);
   d.count_origin = static_cast<std::int64_t>(std::floor(angle * d.counts_per_radian));
-  const auto encoder_config = app::encoder_config(config.board);
+  const auto& encoder_config = config.board.encoder;
   devices::EncoderLinesOptions options;
   options.max_edge_rate_hz = max_edge_rate_hz;
   // The index mark sits at angle 0, as the in-process HIL's encoder has it.

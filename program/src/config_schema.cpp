@@ -141,6 +141,21 @@ void ConfigSchema::number(std::string key, double& value, double lo, double hi, 
        [&value] { return number_text(value); }});
 }
 
+void ConfigSchema::number(std::string key, std::optional<double>& value, double lo, double hi, std::string unit,
+                          std::string doc) {
+  add({std::move(key), unit, std::move(doc),
+       [&value, lo, hi, unit](const toml::node& n) -> std::optional<std::string> {
+         double v = 0.0;
+         if (auto e = read_number(n, lo, hi, unit, v)) return e;
+         value = v;
+         return std::nullopt;
+       },
+       [&value]() -> std::optional<std::string> {
+         if (!value) return std::nullopt;
+         return number_text(*value);
+       }});
+}
+
 void ConfigSchema::boolean(std::string key, bool& value, std::string doc) {
   add({std::move(key), "", std::move(doc),
        [&value](const toml::node& n) -> std::optional<std::string> {

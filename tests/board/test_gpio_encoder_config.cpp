@@ -38,6 +38,16 @@ TEST_CASE("a line given as digits is an offset, anything else a name") {
   CHECK(LineRef::parse("ENC_A").describe() == "\"ENC_A\"");
 }
 
+TEST_CASE("a line keeps the text it was given, and is the same line however its offset was written") {
+  CHECK(LineRef::parse("017").text() == "017");
+  CHECK(LineRef::parse("017") == LineRef::parse("17"));
+  CHECK(LineRef::parse("017") == LineRef::offset(17));
+  CHECK(LineRef::offset(17).text() == "17");
+  CHECK(LineRef::parse("ENC_A").text() == "ENC_A");
+  CHECK(LineRef::parse("").text().empty());
+  CHECK(LineRef::parse("99999999999999999999").text() == "99999999999999999999");
+}
+
 TEST_CASE("a good config validates") { CHECK(good().validate().empty()); }
 
 TEST_CASE("each problem names its field") {

@@ -1,6 +1,8 @@
-// ConfigSchema's fields beyond lever-fw's: optional integers, refused empty strings, text with a syntax of its
-// own, custom fields. lever-fw's own keys are held by tests/cli/lever_fw_cli.sh.
+// ConfigSchema's fields beyond lever-fw's: optional integers and numbers, durations, refused empty strings, text
+// with a syntax of its own, text kept as another type, custom fields. lever-fw's own keys are held by
+// tests/cli/lever_fw_cli.sh.
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -19,7 +21,18 @@ struct Settings {
   std::string list = "x";
   std::filesystem::path file;
   std::uint64_t bytes = 0;
+  std::chrono::microseconds poll{5'000};
+  std::chrono::seconds timeout{2};
+  std::optional<double> bound;
+  std::optional<unsigned> pin = 4;  // "": none
 };
+
+// A pin by number, or none for "".
+std::optional<unsigned> pin_from_text(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  if (text.find_first_not_of("0123456789") != std::string::npos) throw std::invalid_argument("not a pin number");
+  return static_cast<unsigned>(std::stoul(text));
+}
 
 ConfigSchema schema_for(Settings& s) {
   ConfigSchema c;
@@ -48,6 +61,12 @@ ConfigSchema schema_for(Settings& s) {
         return std::nullopt;
       },
       [&s] { return ConfigSchema::number_text(static_cast<double>(s.bytes) / 1000); });
+  c.duration("poll_us", s.poll, 100, 1'000'000, "us", "poll period");
+  c.duration("timeout_s", s.timeout, 1, 60, "s", "give up after");
+  c.number("bound", s.bound, -10.0, 10.0, "N", "a bound, none while unset");
+  c.text_as<std::optional<unsigned>>(
+      "pin", s.pin, pin_from_text, [](const std::optional<unsigned>& p) { return p ? std::to_string(*p) : ""; },
+      "a pin; empty: none");
   return c;
 }
 
@@ -105,4 +124,63 @@ TEST_CASE("a custom field: the number checks' words, its own units, and a print 
   CHECK(reread.load_string(schema.print(), "printed.toml") == std::nullopt);
   CHECK(reread.print() == schema.print());
   CHECK(schema.print().find("# file (unset)") != std::string::npos);
+}
+
+TEST_CASE("a duration: a whole number of its own unit", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  CHECK(schema.value("poll_us") == "5000");
+  CHECK(schema.value("timeout_s") == "2");
+  REQUIRE_FALSE(schema.load_string("poll_us = 250\ntimeout_s = 7", "f.toml"));
+  CHECK(s.poll == std::chrono::microseconds(250));
+  CHECK(s.timeout == std::chrono::seconds(7));
+  CHECK(schema.value("poll_us") == "250");
+  CHECK(schema.print().find("poll_us = 250  # us: poll period\n") != std::string::npos);
+  CHECK(schema.print().find("timeout_s = 7  # s: give up after\n") != std::string::npos);
+  // The integers' checks and words, a float with no fraction taken as the integers take it.
+  CHECK(schema.load_string("poll_us = 99", "f.toml") ==
+        "f.toml: poll_us: must be a whole number in [100, 1000000], got 99");
+  CHECK(schema.load_string("poll_us = 250.5", "f.toml") ==
+        "f.toml: poll_us: must be a whole number in [100, 1000000], got 250.5");
+  CHECK(schema.load_string("timeout_s = \"1\"", "f.toml") ==
+        "f.toml: timeout_s: must be a whole number in [1, 60], got a string");
+  REQUIRE_FALSE(schema.load_string("poll_us = 1000.0", "f.toml"));
+  CHECK(s.poll == std::chrono::milliseconds(1));
+  CHECK(s.timeout == std::chrono::seconds(7));
+}
+
+TEST_CASE("an optional number: unset until loaded, printed as a comment while unset", "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  CHECK(schema.value("bound") == "");
+  CHECK(schema.print().find("# bound (unset)  # N: a bound, none while unset\n") != std::string::npos);
+  REQUIRE_FALSE(schema.load_string("bound = 2", "f.toml"));
+  REQUIRE(s.bound);
+  CHECK(*s.bound == 2.0);
+  CHECK(schema.value("bound") == "2.0");
+  CHECK(schema.load_string("bound = nan", "f.toml") == "f.toml: bound: must be a number of N in [-10, 10], got nan");
+  CHECK(schema.load_string("bound = 11", "f.toml") == "f.toml: bound: must be a number of N in [-10, 10], got 11");
+  CHECK(*s.bound == 2.0);
+}
+
+TEST_CASE("a text kept as another type: its own parse, a text's checks, and a print that reads back",
+          "[program][schema]") {
+  Settings s;
+  auto schema = schema_for(s);
+  CHECK(schema.value("pin") == "'4'");
+  REQUIRE_FALSE(schema.load_string("pin = \"\"", "f.toml"));
+  CHECK_FALSE(s.pin);
+  CHECK(schema.value("pin") == "''");
+  REQUIRE_FALSE(schema.load_assignment("pin=\"12\"", "--set"));
+  CHECK(s.pin == 12u);
+  CHECK(schema.value_text("pin") == "12");
+  CHECK(schema.load_string("pin = \"x\"", "f.toml") == "f.toml: pin: not a pin number");
+  CHECK(schema.load_string("pin = 3", "f.toml") == "f.toml: pin: must be a string, got an integer");
+  CHECK(schema.load_string("pin = \"1\\u00002\"", "f.toml") == "f.toml: pin: must not contain a NUL byte");
+  CHECK(s.pin == 12u);
+  Settings again;
+  auto reread = schema_for(again);
+  REQUIRE_FALSE(reread.load_string(schema.print(), "printed.toml"));
+  CHECK(again.pin == 12u);
+  CHECK(reread.print() == schema.print());
 }

@@ -63,7 +63,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<board::Modbus
   // The watchdog's thread and the printer start before the loop raises this thread to SCHED_FIFO with
   // SCHED_RESET_ON_FORK: started after, they would run SCHED_OTHER; started now they keep the service's own
   // scheduling (FIFO 50 in lever-fw@.service), below the loop, ahead of ordinary load.
-  auto watchdog = board::LoopWatchdog::open(watchdog_config(config.board));
+  auto watchdog = board::LoopWatchdog::open(config.board.watchdog);
   if (!watchdog) {
     fmt::print(stderr, "lever-fw: {}\n", program::printable(watchdog.error().message, 400));
     return kRuntimeFailure;
@@ -113,7 +113,7 @@ int run_lever(const FwConfig& config, BoardHal& hal, std::optional<board::Modbus
 
   // Under the unit /proc/cmdline is hidden (ProcSubset=pid) and the model may be unknown: its ExecStartPre says it
   // then, unsandboxed (--kernel-check). Only a model known to be voluntary is worth a word here.
-  if (config.board.realtime_priority > 0) {
+  if (config.board.realtime.fifo_priority > 0) {
     const auto sources = board::read_kernel_preemption_sources();
     if (board::preemption_of(sources) == board::Preemption::voluntary)
       fmt::print(stderr, "lever-fw: {}\n", board::describe(sources));
@@ -188,13 +188,13 @@ int run_board(const FwConfig& config, bool json_lines, const std::string& motor_
   }
   board::MotorGuardConfig guard_config;
   // One above the loop: a loop spinning at its own priority on a single CPU cannot starve its guard.
-  if (config.board.realtime_priority > 0) {
-    guard_config.fifo_priority = static_cast<int>(std::min<std::int64_t>(config.board.realtime_priority + 1, 99));
+  if (config.board.realtime.fifo_priority > 0) {
+    guard_config.fifo_priority = std::min(config.board.realtime.fifo_priority + 1, 99);
   }
   auto guard = opened(board::MotorGuard::start(guard_config, motor->guard_handles()), "motor guard");
   if (!guard) return kRuntimeFailure;
   fmt::print(stderr, "lever-fw: {}\n", guard->description());
-  auto encoder = opened(board::GpioEncoder::open(encoder_config(config.board)), "encoder");
+  auto encoder = opened(board::GpioEncoder::open(config.board.encoder), "encoder");
   if (!encoder) return kRuntimeFailure;
   std::optional<board::ModbusGauge> gauge;
   const bool uses_gauge =
@@ -207,7 +207,7 @@ int run_board(const FwConfig& config, bool json_lines, const std::string& motor_
   if (!can) return kRuntimeFailure;
   BoardHal hal{{std::move(*encoder), GaugePort{gauge ? &*gauge : nullptr}, std::move(*motor), std::move(*can)}};
   fmt::print(stderr, "lever-fw: {} lever, pair {}, on {}: encoder {}, motor {}\n",
-             config.lever.role == protocol::Role::hsi ? "HSI" : "TOP", config.lever.pair, config.board.can_interface,
+             config.lever.role == protocol::Role::hsi ? "HSI" : "TOP", config.lever.pair, config.board.can.interface,
              hal.encoder_.description(), hal.motor_.description());
   return config.lever.role == protocol::Role::hsi
              ? run_lever<fw::HsiRole>(config, hal, gauge, *guard, json_lines, stop)

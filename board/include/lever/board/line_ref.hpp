@@ -19,12 +19,16 @@ class LineRef {
   unsigned offset_value() const { return std::get<unsigned>(ref_); }
   const std::string& name_value() const { return std::get<std::string>(ref_); }
   std::string describe() const;  // "offset 3" or "\"ENC_A\"", for messages
-  bool operator==(const LineRef&) const = default;
+  // The line as the config wrote it ("017" for offset 17), so that a config printed back says what its file said.
+  std::string text() const;
+  // "017" and "17" are one line.
+  bool operator==(const LineRef& other) const noexcept { return ref_ == other.ref_; }
 
  private:
   explicit LineRef(unsigned offset) : ref_(offset) {}
   explicit LineRef(std::string name) : ref_(std::move(name)) {}
   std::variant<unsigned, std::string> ref_{0u};
+  std::string offset_text_;  // parse()'s digits for an offset; empty: the offset's own
 };
 
 }  // namespace lever::board

@@ -2,11 +2,13 @@
 // One list of fields per configuration serves loading, validation, printing and the docs (as moteus's
 // Serialize does): a TOML file and `--check-config` cannot drift apart. Each field knows its dotted key, its
 // unit, its range and a line of documentation; loading reports the file, the key and the problem.
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -51,8 +53,43 @@ class ConfigSchema {
            return std::to_string(static_cast<std::int64_t>(*value));
          }});
   }
+  // A number the program may leave unset; printed as a comment while unset.
+  void number(std::string key, std::optional<double>& value, double lo, double hi, std::string unit, std::string doc);
+  // A std::chrono duration, in the file a whole number of the duration's own unit (`unit`: its name, "us", "ms"),
+  // so that the key's name, its range and the value kept cannot disagree on the unit.
+  template <typename Rep, typename Period>
+  void duration(std::string key, std::chrono::duration<Rep, Period>& value, std::int64_t lo, std::int64_t hi,
+                std::string unit, std::string doc) {
+    add({std::move(key), std::move(unit), std::move(doc),
+         [&value, lo, hi](const toml::node& n) -> std::optional<std::string> {
+           std::int64_t v = 0;
+           if (auto e = read_integer(n, lo, hi, v)) return e;
+           value = std::chrono::duration<Rep, Period>(static_cast<Rep>(v));
+           return std::nullopt;
+         },
+         [&value] { return std::to_string(static_cast<std::int64_t>(value.count())); }});
+  }
   void boolean(std::string key, bool& value, std::string doc);
   void text(std::string key, std::string& value, std::string doc, Empty empty = Empty::allowed);
+  // A value the file gives as a string and the program keeps as something else (a GPIO line by name or offset; a
+  // line, or none for ""): `from_text` makes the value of the string, `to_text` the string that loads back to it.
+  // The string passes a text's checks first; a std::invalid_argument from_text throws is the key's problem.
+  template <typename T>
+  void text_as(std::string key, T& value, std::function<T(const std::string&)> from_text,
+               std::function<std::string(const T&)> to_text, std::string doc) {
+    add({std::move(key), "", std::move(doc),
+         [&value, from_text = std::move(from_text)](const toml::node& n) -> std::optional<std::string> {
+           std::string s;
+           if (auto e = read_text_value(n, Empty::allowed, s)) return e;
+           try {
+             value = from_text(s);
+           } catch (const std::invalid_argument& e) {
+             return std::string(e.what());
+           }
+           return std::nullopt;
+         },
+         [&value, to_text = std::move(to_text)] { return quoted(to_text(value)); }});
+  }
   // A string with a syntax or a meaning of its own (an id list, a path): `store(text, file)` turns it into the
   // configuration's value, `file` being the file the string was read from (empty for a value from elsewhere, such
   // as --set), for what is relative to it; a std::invalid_argument it throws is the key's problem. An empty string
