@@ -34,6 +34,7 @@ namespace study = lever::study;
 using Clock = std::chrono::steady_clock;
 
 enum class Format { text, json, csv };
+constexpr std::string_view name(Format f) { return f == Format::text ? "text" : f == Format::json ? "json" : "csv"; }
 
 struct SimulateOptions {
   std::vector<double> thresholds{0.05, 0.10, 0.15};
@@ -289,22 +290,7 @@ void add_staircase_options(CLI::App& cmd, study::ThreeIfcConfig& c, const std::s
       ->check(program::whole(1, 100));
 }
 
-int main(int argc, char** argv) {
-  CLI::App app{
-      "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3): run presents a session on a pair\n"
-      "(the settings of every interval confirmed by the levers, every trial in a session log, resumable); simulate "
-      "runs the\n"
-      "3IFC detection-threshold staircase for simulated observers of known threshold and reports the bias and\n"
-      "spread of what it estimates; report summarises session logs (docs/study.md)."};
-  program::describe(app, "lever-study");
-  app.footer(
-      "Exit status: 0 done; 1 a runtime failure (run: the bus or the pair; the log keeps every trial so far; report\n"
-      "--plots: a directory that cannot be made, gnuplot missing or failed); 2 bad input (an option, a session log\n"
-      "that is missing, damaged, or does not match its own config and seed, a --plots that is a file); 3 run: the\n"
-      "answers' input ended before the session; 130 run: stopped by SIGINT or SIGTERM.");
-  const program::Choices<Format> formats{{"text", Format::text}, {"json", Format::json}, {"csv", Format::csv}};
-
-  SimulateOptions s;
+CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& s) {
   CLI::App* sim =
       app.add_subcommand("simulate", "N simulated 3IFC sessions per threshold: the staircase's bias and spread");
   sim->add_option("--thresholds", s.thresholds, "the simulated observers' thresholds (Weibull alpha), comma-separated")
@@ -323,6 +309,7 @@ int main(int argc, char** argv) {
   sim->add_option("--seed", s.seed, "the seed of every session's procedure and observer")
       ->check(program::seed())
       ->default_str("1");
+  static const auto formats = program::choices_of({Format::text, Format::json, Format::csv});
   sim->add_option("--format", s.format, "text, json or csv")->transform(program::one_of(formats))->default_str("text");
   add_staircase_options(*sim, s.config, "");
   sim->add_option("--pass3-factor", s.config.pass3_factor, "pass 3 starts at this times pass 2's result (paper: 0.5)")
@@ -330,8 +317,10 @@ int main(int argc, char** argv) {
   sim->add_option("--max-trials-per-pass", s.config.max_trials_per_pass,
                   "a pass that has not stopped after this many trials ends, not reached (not the paper's; 60)")
       ->check(program::whole(1, 10000));
+  return sim;
+}
 
-  SessionOptions so;
+CLI::App* add_session_command(CLI::App& app, SessionOptions& so) {
   CLI::App* ses = app.add_subcommand(
       "simulate-session", "one whole session answered by a simulated observer, written to a session log (or resumed)");
   ses->add_option("--protocol", so.protocol, "3ifc or rating")
@@ -354,8 +343,10 @@ int main(int argc, char** argv) {
   ses->add_option("--lapse", so.lapse, "3ifc: the lapse rate lambda")
       ->check(program::number({0.0, 0.5, false, true, "a rate"}))
       ->default_str("0.02");
+  return ses;
+}
 
-  RunOptions ro;
+CLI::App* add_run_command(CLI::App& app, RunOptions& ro) {
   CLI::App* run_cmd = app.add_subcommand(
       "run", "a session on a pair: the intervals on the levers, the answers from this terminal or a program");
   run_cmd->add_option("--can", ro.runner.can, "the pair's CAN interface")->required();
@@ -386,37 +377,71 @@ int main(int argc, char** argv) {
                    "seconds to wait for the pair to be armed, homed and free of faults before a trial")
       ->check(program::number({1.0, 86400.0, false, false, "a time in seconds"}))
       ->default_str("300");
+  return run_cmd;
+}
 
-  study::ReportOptions r;
-  Format report_format = Format::text;
-  const program::Choices<study::ReportTable> tables{{"thresholds", study::ReportTable::thresholds},
-                                                    {"traffic", study::ReportTable::traffic},
-                                                    {"ratings", study::ReportTable::ratings}};
-  CLI::App* rep = app.add_subcommand(
+// lever-study report's options: the report's own, and how they were given.
+struct ReportCommand {
+  CLI::App* app = nullptr;
+  study::ReportOptions options;
+  Format format = Format::text;
+  CLI::Option* table = nullptr;
+};
+
+void add_report_command(CLI::App& app, ReportCommand& rc) {
+  study::ReportOptions& r = rc.options;
+  rc.app = app.add_subcommand(
       "report",
       "per-subject thresholds (Fig. 7), traffic against p (Fig. 8) and ratings against p (Fig. 11) from session logs");
-  rep->add_option("logs", r.logs, "session logs (JSON Lines)")->required()->check(program::path());
-  rep->add_option("--format", report_format, "text or csv")
-      ->transform(program::one_of(program::Choices<Format>{{"text", Format::text}, {"csv", Format::csv}}))
-      ->default_str("text");
-  CLI::Option* table_option =
-      rep->add_option("--table", r.table,
-                      "thresholds, traffic or ratings: the one table of --format csv (default thresholds); with text, "
-                      "that table alone (default: every table the logs fill)")
-          ->transform(program::one_of(tables))
-          ->default_str("thresholds");
-  rep->add_option(
-         "--plots", r.plots,
-         "a directory (made if missing) for fig7.png, fig8.png and fig11.png (those the logs fill), the tables "
-         "as CSV and plots.gp, drawn by gnuplot")
+  rc.app->add_option("logs", r.logs, "session logs (JSON Lines)")->required()->check(program::path());
+  static const auto formats = program::choices_of({Format::text, Format::csv});
+  rc.app->add_option("--format", rc.format, "text or csv")->transform(program::one_of(formats))->default_str("text");
+  static const auto tables = program::choices_of(study::kAllReportTables);
+  rc.table = rc.app
+                 ->add_option("--table", r.table,
+                              "thresholds, traffic or ratings: the one table of --format csv (default thresholds); "
+                              "with text, that table alone (default: every table the logs fill)")
+                 ->transform(program::one_of(tables))
+                 ->default_str("thresholds");
+  rc.app
+      ->add_option("--plots", r.plots,
+                   "a directory (made if missing) for fig7.png, fig8.png and fig11.png (those the logs fill), the "
+                   "tables as CSV and plots.gp, drawn by gnuplot")
       ->check(program::path());
+}
+
+int report(ReportCommand rc) {
+  rc.options.csv = rc.format == Format::csv;
+  rc.options.table_given = rc.table->count() > 0;
+  return study::report(rc.options);
+}
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "The paper's user-study procedures (Hinterseer et al., IV-A-2 and IV-B-3): run presents a session on a pair\n"
+      "(the settings of every interval confirmed by the levers, every trial in a session log, resumable); simulate "
+      "runs the\n"
+      "3IFC detection-threshold staircase for simulated observers of known threshold and reports the bias and\n"
+      "spread of what it estimates; report summarises session logs (docs/study.md)."};
+  program::describe(app, "lever-study");
+  app.footer(
+      "Exit status: 0 done; 1 a runtime failure (run: the bus or the pair; the log keeps every trial so far; report\n"
+      "--plots: a directory that cannot be made, gnuplot missing or failed); 2 bad input (an option, a session log\n"
+      "that is missing, damaged, or does not match its own config and seed, a --plots that is a file); 3 run: the\n"
+      "answers' input ended before the session; 130 run: stopped by SIGINT or SIGTERM.");
+  SimulateOptions simulate_options;
+  CLI::App* simulate_cmd = add_simulate_command(app, simulate_options);
+  SessionOptions session_options;
+  CLI::App* session_cmd = add_session_command(app, session_options);
+  RunOptions run_options;
+  CLI::App* run_cmd = add_run_command(app, run_options);
+  ReportCommand report_command;
+  add_report_command(app, report_command);
   app.require_subcommand(1);
 
   if (const auto stop = program::parse(app, argc, argv)) return *stop;
-  if (run_cmd->parsed()) return run(ro);
-  if (sim->parsed()) return simulate(s);
-  if (ses->parsed()) return simulated_session(so);
-  r.csv = report_format == Format::csv;
-  r.table_given = table_option->count() > 0;
-  return study::report(r);
+  if (run_cmd->parsed()) return run(run_options);
+  if (simulate_cmd->parsed()) return simulate(simulate_options);
+  if (session_cmd->parsed()) return simulated_session(session_options);
+  return report(std::move(report_command));
 }

@@ -3,11 +3,16 @@
 // Fig. 8 (each direction's traffic against p) and Fig. 11 (ratings against p), as text, CSV and PNG plots
 // (docs/study.md, "lever-study").
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace lever::study {
 
 enum class ReportTable { thresholds, traffic, ratings };
+inline constexpr ReportTable kAllReportTables[] = {ReportTable::thresholds, ReportTable::traffic, ReportTable::ratings};
+constexpr std::string_view name(ReportTable t) {
+  return t == ReportTable::thresholds ? "thresholds" : t == ReportTable::traffic ? "traffic" : "ratings";
+}
 
 struct ReportOptions {
   std::vector<std::string> logs;
