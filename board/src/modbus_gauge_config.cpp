@@ -53,17 +53,19 @@ std::optional<std::string> check(const ModbusRtuEndpoint& rtu) {
   return std::nullopt;
 }
 
+// "FIELD: must be a, b or c" unless `value` is one of `all` (a value cast from a number may be none).
+template <typename E, std::size_t N>
+std::optional<std::string> one_of(const char* field, E value, const E (&all)[N]) {
+  if (std::find(std::begin(all), std::end(all), value) != std::end(all)) return std::nullopt;
+  std::string names;
+  for (std::size_t i = 0; i < N; ++i) names += (i == 0 ? "" : i + 1 == N ? " or " : ", ") + std::string(name(all[i]));
+  return std::string(field) + ": must be " + names;
+}
+
 std::optional<std::string> check(const GaugeRegisterMap& map) {
-  if (map.function != RegisterFunction::holding && map.function != RegisterFunction::input) {
-    return "registers.function: must be holding or input";
-  }
-  if (map.type != RegisterType::int16 && map.type != RegisterType::uint16 && map.type != RegisterType::int32 &&
-      map.type != RegisterType::uint32 && map.type != RegisterType::float32) {
-    return "registers.type: must be int16, uint16, int32, uint32 or float32";
-  }
-  if (map.word_order != WordOrder::high_first && map.word_order != WordOrder::low_first) {
-    return "registers.word_order: must be high_first or low_first";
-  }
+  if (auto e = one_of("registers.function", map.function, kAllRegisterFunctions)) return e;
+  if (auto e = one_of("registers.type", map.type, kAllRegisterTypes)) return e;
+  if (auto e = one_of("registers.word_order", map.word_order, kAllWordOrders)) return e;
   const int last_address = 65535 - (register_count(map.type) - 1);
   if (map.address < 0 || map.address > last_address) {
     return "registers.address: " + std::to_string(map.address) + " is outside 0.." + std::to_string(last_address) +

@@ -144,12 +144,13 @@ TEST_CASE("RTU endpoint problems name their field") {
 }
 
 TEST_CASE("register map problems name their field") {
-  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) { m.function = static_cast<RegisterFunction>(7); }),
-             StartsWith("registers.function:"));
-  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) { m.type = static_cast<RegisterType>(9); }),
-             StartsWith("registers.type:"));
-  CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) { m.word_order = static_cast<WordOrder>(2); }),
-             StartsWith("registers.word_order:"));
+  // Each names the values the type's own table holds (kAllRegisterTypes and name(), beside the type).
+  CHECK(problem_with_map([](GaugeRegisterMap& m) { m.function = static_cast<RegisterFunction>(7); }) ==
+        "registers.function: must be holding or input");
+  CHECK(problem_with_map([](GaugeRegisterMap& m) { m.type = static_cast<RegisterType>(9); }) ==
+        "registers.type: must be int16, uint16, int32, uint32 or float32");
+  CHECK(problem_with_map([](GaugeRegisterMap& m) { m.word_order = static_cast<WordOrder>(2); }) ==
+        "registers.word_order: must be high_first or low_first");
   CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) { m.address = -1; }), StartsWith("registers.address:"));
   CHECK(problem_with_map([](GaugeRegisterMap& m) { m.address = 65535; }).empty());  // one int16
   CHECK_THAT(problem_with_map([](GaugeRegisterMap& m) {

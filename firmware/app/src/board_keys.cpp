@@ -5,6 +5,8 @@
 #include <optional>
 #include <utility>
 
+#include "lever/program/choices.hpp"
+
 namespace lever::app {
 namespace {
 
@@ -37,26 +39,17 @@ void bind_gauge_link(ConfigSchema& s, GaugeLink& link) {
   s.integer("board.gauge.unit_id", link.tcp.unit_id, 0, 255, "", "tcp: unit id (255: the device itself)");
   s.text("board.gauge.device", link.rtu.device, "rtu: serial device");
   s.integer("board.gauge.baud", link.rtu.baud, 1200, 921600, "baud", "rtu: a standard rate");
-  s.choice("board.gauge.parity", link.rtu.parity,
-           {{"none", board::Parity::none}, {"even", board::Parity::even}, {"odd", board::Parity::odd}}, "rtu: parity");
+  s.choice("board.gauge.parity", link.rtu.parity, program::choices_of(board::kAllParities), "rtu: parity");
   s.integer("board.gauge.stop_bits", link.rtu.stop_bits, 1, 2, "", "rtu: stop bits");
   s.integer("board.gauge.slave_id", link.rtu.slave_id, 1, 247, "", "rtu: slave id");
 }
 
 void bind_gauge_registers(ConfigSchema& s, board::GaugeRegisterMap& r) {
-  s.choice("board.gauge.function", r.function,
-           {{"holding", board::RegisterFunction::holding}, {"input", board::RegisterFunction::input}},
+  s.choice("board.gauge.function", r.function, program::choices_of(board::kAllRegisterFunctions),
            "register table (function code 3 or 4)");
   s.integer("board.gauge.address", r.address, 0, 65535, "", "first register, 0-based (a manual's 40001 is 0)");
-  s.choice("board.gauge.type", r.type,
-           {{"int16", board::RegisterType::int16},
-            {"uint16", board::RegisterType::uint16},
-            {"int32", board::RegisterType::int32},
-            {"uint32", board::RegisterType::uint32},
-            {"float32", board::RegisterType::float32}},
-           "register type");
-  s.choice("board.gauge.word_order", r.word_order,
-           {{"high_first", board::WordOrder::high_first}, {"low_first", board::WordOrder::low_first}},
+  s.choice("board.gauge.type", r.type, program::choices_of(board::kAllRegisterTypes), "register type");
+  s.choice("board.gauge.word_order", r.word_order, program::choices_of(board::kAllWordOrders),
            "32-bit types: which word the lower address holds");
   s.number("board.gauge.scale", r.scale, -1e12, 1e12, "N", "newtons per raw unit (not 0)");
   s.number("board.gauge.offset", r.offset, -1e12, 1e12, "N", "added after scaling");

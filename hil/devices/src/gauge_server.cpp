@@ -48,29 +48,10 @@ struct MappingFree {
 // half-way; libmodbus's byte timeout (500 ms) covers the gaps inside one.
 constexpr std::uint32_t kIndicationTimeoutUs = 100'000;
 
-const char* name_of(RegisterFunction function) { return function == RegisterFunction::holding ? "holding" : "input"; }
-
-const char* name_of(board::RegisterType type) {
-  switch (type) {
-    case board::RegisterType::int16:
-      return "int16";
-    case board::RegisterType::uint16:
-      return "uint16";
-    case board::RegisterType::int32:
-      return "int32";
-    case board::RegisterType::uint32:
-      return "uint32";
-    case board::RegisterType::float32:
-      return "float32";
-  }
-  return "?";
-}
-
 std::string describe_map(const board::GaugeRegisterMap& map) {
-  std::string text = std::string(name_of(map.function)) + " " + std::to_string(map.address) + " " + name_of(map.type);
-  if (board::register_count(map.type) == 2) {
-    text += map.word_order == board::WordOrder::high_first ? " high_first" : " low_first";
-  }
+  std::string text = std::string(board::name(map.function)) + " " + std::to_string(map.address) + " " +
+                     std::string(board::name(map.type));
+  if (board::register_count(map.type) == 2) text += " " + std::string(board::name(map.word_order));
   return text;
 }
 

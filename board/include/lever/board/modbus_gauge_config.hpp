@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 
 namespace lever::board {
@@ -19,6 +20,8 @@ struct ModbusTcpEndpoint {
 
 // Modbus RTU uses 8 data bits; the field exists so a config file can state it and be checked.
 enum class Parity : char { none = 'N', even = 'E', odd = 'O' };
+inline constexpr Parity kAllParities[] = {Parity::none, Parity::even, Parity::odd};
+constexpr std::string_view name(Parity p) { return p == Parity::none ? "none" : p == Parity::even ? "even" : "odd"; }
 
 struct ModbusRtuEndpoint {
   std::string device = "/dev/ttyUSB0";
@@ -35,8 +38,28 @@ enum class RegisterFunction : std::uint8_t {
   holding,  // function code 3
   input,    // function code 4
 };
+inline constexpr RegisterFunction kAllRegisterFunctions[] = {RegisterFunction::holding, RegisterFunction::input};
+constexpr std::string_view name(RegisterFunction f) { return f == RegisterFunction::holding ? "holding" : "input"; }
 
 enum class RegisterType : std::uint8_t { int16, uint16, int32, uint32, float32 };
+inline constexpr RegisterType kAllRegisterTypes[] = {RegisterType::int16, RegisterType::uint16, RegisterType::int32,
+                                                     RegisterType::uint32, RegisterType::float32};
+// A switch with no default: a new type fails the build until it has its name.
+constexpr std::string_view name(RegisterType t) {
+  switch (t) {
+    case RegisterType::int16:
+      return "int16";
+    case RegisterType::uint16:
+      return "uint16";
+    case RegisterType::int32:
+      return "int32";
+    case RegisterType::uint32:
+      return "uint32";
+    case RegisterType::float32:
+      return "float32";
+  }
+  return "?";
+}
 
 // Which register of a 32-bit pair holds the more significant 16 bits. The bytes inside one register are
 // always big-endian (the Modbus wire order), so only the word order varies between devices.
@@ -44,6 +67,8 @@ enum class WordOrder : std::uint8_t {
   high_first,  // "ABCD": the lower address holds the high word
   low_first,   // "CDAB": the lower address holds the low word
 };
+inline constexpr WordOrder kAllWordOrders[] = {WordOrder::high_first, WordOrder::low_first};
+constexpr std::string_view name(WordOrder w) { return w == WordOrder::high_first ? "high_first" : "low_first"; }
 
 // Where the force is and how to turn it into newtons: newtons = raw * scale + offset.
 struct GaugeRegisterMap {
