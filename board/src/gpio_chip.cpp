@@ -1,5 +1,7 @@
 #include "gpio_chip.hpp"
 
+#include <fcntl.h>
+
 #include <cerrno>
 
 namespace lever::board {
@@ -35,6 +37,14 @@ std::string line_user_if_busy(gpiod_line* line, int err) {
     return std::string(", used by \"") + gpiod_line_consumer(line) + "\"";
   }
   return {};
+}
+
+int nonblocking_event_fd(gpiod_line* line) {
+  const int fd = gpiod_line_event_get_fd(line);
+  if (fd < 0) return -1;
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (flags < 0 || ::fcntl(fd, F_SETFL, flags | O_NONBLOCK) < 0) return -1;
+  return fd;
 }
 
 }  // namespace lever::board

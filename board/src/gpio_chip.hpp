@@ -34,4 +34,12 @@ std::string missing_line_reason(gpiod_chip* chip, const LineRef& ref);
 // After a request failed with `err`: ", used by \"name\"" when the line is busy and its user is known.
 std::string line_user_if_busy(gpiod_line* line, int err);
 
+// The v1 interface's per-line event FIFO (gpiolib-cdev.c: DECLARE_KFIFO(events, struct gpioevent_data, 16); when
+// full, the newest events are dropped). A read asking for this many that gets them all has found the FIFO full.
+inline constexpr unsigned kKernelEventFifo = 16;
+
+// The event file of a line requested for its edges, made non-blocking, so that a step never waits for an edge;
+// -1 with errno set when that failed.
+int nonblocking_event_fd(gpiod_line* line);
+
 }  // namespace lever::board

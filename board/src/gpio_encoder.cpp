@@ -1,6 +1,5 @@
 #include "lever/board/gpio_encoder.hpp"
 
-#include <fcntl.h>
 #include <gpiod.h>
 #include <poll.h>
 #include <pthread.h>
@@ -25,10 +24,6 @@
 namespace lever::board {
 
 namespace {
-
-// The v1 interface's per-line event FIFO (gpiolib-cdev.c: DECLARE_KFIFO(events, struct gpioevent_data, 16)).
-// A read asking for this many that gets them all has found the FIFO full.
-constexpr unsigned kKernelFifo = 16;
 
 std::uint64_t to_ns(const timespec& ts) noexcept {
   return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<std::uint64_t>(ts.tv_nsec);
@@ -163,7 +158,7 @@ void GpioEncoder::Impl::run_level_reader() noexcept {
 }
 
 std::uint64_t GpioEncoder::Impl::read_events() noexcept {
-  std::array<gpiod_line_event, kKernelFifo> buffer{};
+  std::array<gpiod_line_event, kKernelEventFifo> buffer{};
   std::uint64_t complete = UINT64_MAX;
   for (std::size_t i = 0; i < kEncoderLines; ++i) {
     if (fds[i] < 0) continue;
@@ -171,12 +166,12 @@ std::uint64_t GpioEncoder::Impl::read_events() noexcept {
     for (;;) {
       // Always ask for a whole FIFO: only then does a full answer prove the FIFO was full. With less room the
       // events wait in the kernel (and a FIFO that fills meanwhile still shows as full on a later read).
-      if (tracker.room(line) < kKernelFifo) {
+      if (tracker.room(line) < kKernelEventFifo) {
         complete = std::min(complete, tracker.newest_staged_ns(line));
         break;
       }
       const std::uint64_t before = static_cast<std::uint64_t>(monotonic_ns());
-      const int n = gpiod_line_event_read_fd_multiple(fds[i], buffer.data(), kKernelFifo);
+      const int n = gpiod_line_event_read_fd_multiple(fds[i], buffer.data(), kKernelEventFifo);
       if (n < 0) {
         if (errno != EAGAIN && errno != EWOULDBLOCK) tracker.note_read_error();
         complete = std::min(complete, before);
@@ -185,7 +180,7 @@ std::uint64_t GpioEncoder::Impl::read_events() noexcept {
       for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
         tracker.stage(line, LineEvent{to_ns(buffer[k].ts), buffer[k].event_type == GPIOD_LINE_EVENT_RISING_EDGE});
       }
-      if (static_cast<unsigned>(n) < kKernelFifo) {
+      if (static_cast<unsigned>(n) < kKernelEventFifo) {
         // The read stops only when the FIFO is empty or our buffer full: all that was queued before it is here.
         complete = std::min(complete, before);
         break;
@@ -274,10 +269,8 @@ Result<GpioEncoder> GpioEncoder::open(const GpioEncoderConfig& config) {
       return os_error(err, where + ": cannot request its edge events" + line_user_if_busy(line, err));
     }
     lines[i] = line;
-    fds[i] = gpiod_line_event_get_fd(line);
-    // A drain must never wait for an edge.
-    const int fl = ::fcntl(fds[i], F_GETFL);
-    if (fl < 0 || ::fcntl(fds[i], F_SETFL, fl | O_NONBLOCK) < 0) {
+    fds[i] = nonblocking_event_fd(line);
+    if (fds[i] < 0) {
       const int err = errno;
       return os_error(err, where + ": cannot make its events non-blocking");
     }

@@ -15,10 +15,6 @@ namespace {
 
 Error os_error(int err, std::string message) { return Error{std::move(message) + ": " + std::strerror(err), err}; }
 
-// The v1 interface's event FIFO of a line (gpiolib-cdev.c: 16 events; when full, the newest are dropped). A read
-// asking for this many that gets them all has found it full.
-constexpr unsigned kKernelFifo = 16;
-
 enum class Direction { output, input };
 
 struct Found {
@@ -100,9 +96,8 @@ Result<MotorLines> MotorLines::open(const PwmMotorConfig& config) {
       const int err = errno;
       return os_error(err, f.where + ": cannot request its edge events" + line_user_if_busy(f.line, err));
     }
-    const int fd = gpiod_line_event_get_fd(f.line);
-    const int fl = ::fcntl(fd, F_GETFL);
-    if (fl < 0 || ::fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
+    const int fd = nonblocking_event_fd(f.line);
+    if (fd < 0) {
       const int err = errno;
       return os_error(err, f.where + ": cannot make its events non-blocking");
     }
@@ -142,16 +137,16 @@ void MotorLines::forget_written() noexcept {
 std::optional<bool> MotorLines::fault() noexcept {
   if (!fault_) return false;
   Input& in = *fault_;
-  std::array<gpiod_line_event, kKernelFifo> events{};
+  std::array<gpiod_line_event, kKernelEventFifo> events{};
   for (;;) {
-    const int n = gpiod_line_event_read_fd_multiple(in.events_fd, events.data(), kKernelFifo);
+    const int n = gpiod_line_event_read_fd_multiple(in.events_fd, events.data(), kKernelEventFifo);
     if (n < 0) {
       if (errno == EAGAIN || errno == EWOULDBLOCK) break;
       return std::nullopt;
     }
     // Both edges are requested, so the kernel types each event by the (logical) level it read after the edge.
     if (n > 0) in.asserted = events[static_cast<std::size_t>(n) - 1].event_type == GPIOD_LINE_EVENT_RISING_EDGE;
-    if (static_cast<unsigned>(n) < kKernelFifo) break;
+    if (static_cast<unsigned>(n) < kKernelEventFifo) break;
     // A full FIFO dropped the newest edges, the ones that say the level now: read it once, the one value read on
     // this path (a driver's fault output that changes 16 times between two steps is a fault of its own).
     const int value = gpiod_line_get_value(in.line);

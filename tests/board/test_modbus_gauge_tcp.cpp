@@ -312,7 +312,7 @@ TEST_CASE("TCP: each preset flags the amplifier's range end, the load cell's cap
 
 // What each section tells apart is a destructor that ends by itself from one that waits out a reconnect backoff (5 s
 // here): the bound is half the backoff, past which only the wait explains the time. A tighter bound would time the
-// machine's scheduling, which on a loaded CI machine took 0.9 s once (a speed goal is a benchmark's, not a test's).
+// machine's scheduling, which is a benchmark's business, not a test's.
 TEST_CASE("TCP: the destructor ends at once between reads and within a response timeout during one") {
   constexpr auto kBackoff = 5s;
   SECTION("waiting out a reconnect backoff") {
