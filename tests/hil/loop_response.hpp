@@ -132,26 +132,34 @@ struct Margin {
 };
 
 // The crossover with the smallest phase margin of an open loop L(omega) (negative feedback: 1 + L), searched
-// below the Nyquist frequency; none when |L| never crosses 1.
+// below the Nyquist frequency; none when |L| never crosses 1. The phase is unwrapped from 1 rad/s up, starting in
+// (-270, 90] degrees (a double integrator starts at -180, a spring with a damper's lead just above 0), so that a
+// crossing with a phase lead reads as the wide margin it is, not as a lag of nearly 360 degrees.
 template <typename Loop>
 std::optional<Margin> smallest_margin(const Loop& loop) {
   std::optional<Margin> worst;
   const double top = std::numbers::pi / kPeriod;
+  const auto wrapped = [](double a) { return std::remainder(a, 2.0 * std::numbers::pi); };
   double w0 = 1.0;
-  double m0 = std::abs(loop(w0));
+  Complex l0 = loop(w0);
+  double phase0 = std::arg(l0);
+  if (phase0 > std::numbers::pi / 2.0) phase0 -= 2.0 * std::numbers::pi;
   for (double w1 = w0 * 1.001; w1 < top; w0 = w1, w1 *= 1.001) {
-    const double m1 = std::abs(loop(w1));
-    if ((m0 - 1.0) * (m1 - 1.0) < 0.0) {
+    const Complex l1 = loop(w1);
+    const double phase1 = phase0 + wrapped(std::arg(l1) - std::arg(l0));
+    if ((std::abs(l0) - 1.0) * (std::abs(l1) - 1.0) < 0.0) {
       double lo = w0, hi = w1;  // bisect |L| = 1
       for (int i = 0; i < 60; ++i) {
         const double mid = 0.5 * (lo + hi);
         ((std::abs(loop(lo)) - 1.0) * (std::abs(loop(mid)) - 1.0) <= 0.0 ? hi : lo) = mid;
       }
       const double w = 0.5 * (lo + hi);
-      const Margin m{w / (2.0 * std::numbers::pi), std::arg(-loop(w)) * 180.0 / std::numbers::pi};
+      const double phase = phase0 + wrapped(std::arg(loop(w)) - std::arg(l0));
+      const Margin m{w / (2.0 * std::numbers::pi), (std::numbers::pi + phase) * 180.0 / std::numbers::pi};
       if (!worst || m.phase_margin_deg < worst->phase_margin_deg) worst = m;
     }
-    m0 = m1;
+    l0 = l1;
+    phase0 = phase1;
   }
   return worst;
 }

@@ -21,8 +21,11 @@ namespace {
 constexpr double kTimingShareOfMargin = 0.5;
 
 struct Loops {
-  fw::LeverConfig fw = fw::LeverConfig{};  // the firmware's gains as a board runs them
-  hil::SimConfig sim = hil::SimConfig{};   // the HIL's plant, wall, operator and amplifier (docs/hil-model.md)
+  hil::SimConfig sim = hil::SimConfig{};  // the HIL's plant, wall, operator and amplifier (docs/hil-model.md)
+  // The firmware's gains as the boards run them (firmware/config/hsi.toml and top.toml, which the HIL's defaults
+  // follow): the same but for the TOP's velocity estimate.
+  fw::LeverConfig top = sim.top_firmware;
+  fw::LeverConfig hsi = sim.hsi_firmware;
 
   test::LeverMechanics top_free(bool moving) const {
     const auto& p = sim.top_plant;
@@ -42,28 +45,29 @@ struct Loops {
   // The TOP's position loop broken at its torque: PD on the angle, the D through the velocity estimate.
   Complex top_loop(const test::SampledPlant& plant, double w) const {
     const Complex z = std::polar(1.0, w * kPeriod);
-    const Complex v = test::velocity_estimate(z, fw.velocity.bandwidth_rad_s);
-    return (fw.position.kp + fw.position.kd * v) * plant.at(z);
+    const Complex v = test::velocity_estimate(z, top.velocity.bandwidth_rad_s);
+    return (top.position.kp + top.position.kd * v) * plant.at(z);
   }
 
   // The HSI in contact, broken at its torque: its own contact damping, and the teleoperation loop (its angle
   // to the TOP over the link, the TOP's closed position loop pressing the wall, the wall's force through the
   // amplifier and back over the link, displayed). `gauge_delay_s`: the amplifier's output hold and, on a
   // board, the Modbus poll.
-  Complex hsi_loop(const test::SampledPlant& hsi, const test::SampledPlant& top, int link_ticks, double gauge_delay_s,
-                   double w) const {
+  Complex hsi_loop(const test::SampledPlant& hsi_plant, const test::SampledPlant& top_plant, int link_ticks,
+                   double gauge_delay_s, double w) const {
     const Complex z = std::polar(1.0, w * kPeriod);
     const Complex s{0.0, w};
-    const Complex v = test::velocity_estimate(z, fw.velocity.bandwidth_rad_s);
-    const auto& c = fw.position;
-    const Complex pt = top.at(z);
-    const Complex tracking = pt * (c.kp + (c.kd + c.kff_velocity) * v) / (1.0 + pt * (c.kp + c.kd * v));
+    const Complex v_top = test::velocity_estimate(z, top.velocity.bandwidth_rad_s);
+    const Complex v_hsi = test::velocity_estimate(z, hsi.velocity.bandwidth_rad_s);
+    const auto& c = top.position;
+    const Complex pt = top_plant.at(z);
+    const Complex tracking = pt * (c.kp + (c.kd + c.kff_velocity) * v_top) / (1.0 + pt * (c.kp + c.kd * v_top));
     const double pole = 2.0 * std::numbers::pi * sim.gauge.pole_hz();
     const Complex amplifier = std::exp(-s * gauge_delay_s) / ((1.0 + s / pole) * (1.0 + s / pole));
     const Complex wall_torque = sim.wall.stiffness + sim.wall.damping * s;
-    const double display = fw.display.gain * fw.display.lever_arm_m / sim.top_plant.radius;
+    const double display = hsi.display.gain * hsi.display.lever_arm_m / sim.top_plant.radius;
     const Complex teleoperation = std::pow(z, -2.0 * link_ticks) * amplifier * wall_torque * tracking * display;
-    return (teleoperation + fw.display.contact_damping_nms * v) * hsi.at(z);
+    return (teleoperation + hsi.display.contact_damping_nms * v_hsi) * hsi_plant.at(z);
   }
 };
 
@@ -81,14 +85,14 @@ double top_growth_with_delay(const Loops& l, double delay_s) {
   const int delay_steps = static_cast<int>(std::lround(delay_s / h));
   std::deque<double> pending(static_cast<std::size_t>(delay_steps) + 1, 0.0);
   double angle = 1e-3, speed = 0.0, motor = 0.0, est_angle = angle, est_speed = 0.0, command = 0.0;
-  const double b = l.fw.velocity.bandwidth_rad_s;
+  const double b = l.top.velocity.bandwidth_rad_s;
   double first = 0.0, last = 0.0;
   constexpr int kTicks = 800;
   for (int k = 0; k < kTicks; ++k) {
     const double e = angle - est_angle;  // the firmware's step, on the sampled angle
     est_speed += b * b * e * kPeriod;
     est_angle += (est_speed + 2.0 * b * e) * kPeriod;
-    const double torque = -(l.fw.position.kp * angle + l.fw.position.kd * est_speed);
+    const double torque = -(l.top.position.kp * angle + l.top.position.kd * est_speed);
     for (int i = 0; i < kSub; ++i) {
       pending.push_back(torque);
       command = pending.front();
@@ -163,4 +167,20 @@ TEST_CASE("the loops' crossovers and phase margins, and the timing budget of fir
   CHECK(allowed_ms + kPeriod * 1e3 > lateness_ms);
   // Within any crossover period of any of the loops, no more than the budget: the window spans the longest.
   CHECK(static_cast<double>(timing.window) == std::ceil(slowest_cycle_ms));
+}
+
+TEST_CASE("a crossing with a phase lead is a wide margin, one with a lag past -180 degrees a negative one",
+          "[hil][margins]") {
+  // 0.5 (1 + j w / 50) crosses |L| = 1 at 50 sqrt(3) rad/s with a 60 degree lead: 1 + L never vanishes, the margin is
+  // 240 degrees (read as -120, unstable, before the phase was unwrapped). The same with three 1 ms delays lags past
+  // -180 degrees at its crossing: the margin is negative.
+  const auto lead = [](double w) { return 0.5 * Complex{1.0, w / 50.0}; };
+  const auto m = test::smallest_margin(lead);
+  REQUIRE(m);
+  CHECK(m->crossover_hz == Approx(50.0 * std::sqrt(3.0) / (2.0 * std::numbers::pi)).epsilon(1e-3));
+  CHECK(m->phase_margin_deg == Approx(240.0).margin(0.1));
+  const auto lagging = [](double w) { return 1e4 / (Complex{0.0, w} * Complex{0.0, w}) * std::polar(1.0, -3e-3 * w); };
+  const auto n = test::smallest_margin(lagging);
+  REQUIRE(n);
+  CHECK(n->phase_margin_deg == Approx(-3e-3 * 100.0 * 180.0 / std::numbers::pi).margin(0.1));
 }
