@@ -177,6 +177,27 @@ TEST_CASE("the tracking loop is stable for every step it is given: late ticks ma
 
 // The adaptive-window difference (Janabi-Sharifi, Hayward and Chen 2000, end fit, d = 1 count, 20 ms): exactly
 // zero at rest, fine steps at a slow constant speed, and a short window as soon as the lever accelerates.
+TEST_CASE("the tracking loop's 1 ms step is stable up to its stated limit and rings out past it",
+          "[firmware][velocity]") {
+  // One count of quantization once, then a still lever: the estimate's swing over ticks 9000-10000 against its
+  // first 1000 ticks. Just under the limit the slowest pole (magnitude near 1) still decays; just past it, it grows.
+  const auto late_over_early = [](double bandwidth) {
+    VelocityEstimator v({VelocityMethod::tracking_loop, bandwidth});
+    constexpr double kCount = 2.0 * std::numbers::pi / 16384.0;
+    double early = 0.0, late = 0.0;
+    for (int k = 0; k < 10000; ++k) {
+      const double speed = std::fabs(v.update(k == 0 ? 0.0 : kCount, kSecondsPerTick));
+      if (k > 0 && k <= 1000) early = std::max(early, speed);
+      if (k > 9000) late = std::max(late, speed);
+    }
+    return late / early;
+  };
+  const double limit = VelocityEstimator::kMaxStableBandwidthRadS;
+  CHECK(limit == Approx(828.427).epsilon(1e-5));
+  CHECK(late_over_early(0.99 * limit) < 1.0);
+  CHECK(late_over_early(1.01 * limit) > 1.0);
+}
+
 TEST_CASE("the adaptive window is zero at rest, fine when slow, quick when the speed changes", "[firmware][velocity]") {
   SECTION("at rest every window is flat: exactly zero, over the longest window") {
     AdaptiveWindowVelocity w;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -66,7 +67,10 @@ void bind_encoder_and_velocity(program::ConfigSchema& s, fw::LeverConfig& l) {
            {{"tracking_loop", fw::VelocityMethod::tracking_loop},
             {"backward_difference", fw::VelocityMethod::backward_difference}},
            "velocity estimate");
-  s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0, 2000.0, "rad/s", "tracking loop bandwidth");
+  // Whole rad/s below the 1 ms Euler step's stability limit, so the largest value accepted is a stable loop.
+  s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0,
+           std::floor(fw::VelocityEstimator::kMaxStableBandwidthRadS), "rad/s",
+           "tracking loop bandwidth, below the 1 ms loop's stability limit");
 }
 
 void bind_force_gauge(program::ConfigSchema& s, fw::LeverConfig& l) {

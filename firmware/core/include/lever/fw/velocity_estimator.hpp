@@ -16,6 +16,12 @@ class VelocityEstimator {
     VelocityMethod method = VelocityMethod::tracking_loop;
     double bandwidth_rad_s = 300.0;  // tracking loop: both poles at -bandwidth (critically damped)
   };
+  // The tracking loop's Euler step at one period T is stable only for b T below 2 sqrt(2) - 2: its error
+  // dynamics (trace 2 - 2bT - (bT)^2, determinant 1 - 2bT) put a pole at -1 where (bT)^2 + 4 bT - 4 = 0. Beyond
+  // it the estimate rings at the Nyquist frequency and grows; near it, it amplifies the encoder's quantization there
+  // thousands of times (docs/firmware.md, "Timing bounds").
+  static constexpr double kStableBandwidthTimesPeriod = 0.82842712474619;
+  static constexpr double kMaxStableBandwidthRadS = kStableBandwidthTimesPeriod / kSecondsPerTick;
   struct State {
     double angle = 0.0;     // tracking loop's angle estimate
     double velocity = 0.0;  // output
