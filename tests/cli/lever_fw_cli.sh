@@ -17,6 +17,12 @@ bad_config() {  # NAME EXPECTED_MESSAGE TOML
   check "$name: says '$expected'" grep -qF -- "$expected" "$work/err"
   check "$name: prints no configuration" test ! -s "$work/out"
 }
+taken_config() {  # WHY TOML: a configuration just inside a bound, which must load without a word
+  printf '%s\n' "$2" >"$work/edge.toml"
+  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
+  local code=$?
+  check "$1, taken: ${2//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" test "$code" -eq 0 -a ! -s "$work/err"
+}
 
 "$fw" --help >"$work/help"; check "--help exits 0" test $? -eq 0
 check "--help documents the board's options" grep -q -- "--motor-off" "$work/help"
@@ -59,11 +65,7 @@ bad_config "POSITION_LIMIT certain once homed" "homing.home_position_rad: -1.01 
   $'[homing]\nhome_position_rad = -1.01'
 for relation in $'[link]\ncomms_timeout_ms = 26' $'[homing]\ntimeout_ms = 101' $'[homing]\nhome_position_rad = -1.0' \
   $'[homing]\nmethod = "absolute"\nhome_position_rad = -1.01'; do
-  printf '%s\n' "$relation" >"$work/edge.toml"
-  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
-  code=$?
-  check "just inside the relation, taken: ${relation//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" \
-    test "$code" -eq 0 -a ! -s "$work/err"
+  taken_config "just inside the relation" "$relation"
 done
 bad_config "a gauge staler than its polls" "gauge.stale_ms: 5 ms does not outlast one missed poll" $'[gauge]\nstale_ms = 5\n[board.gauge]\npoll_us = 10000'
 # The gauge's timings as a relation: one missed poll costs a response timeout, RTU's a backoff more.
@@ -89,11 +91,7 @@ bad_config "a Weber fraction of 1 (no change ever perceived)" "codec.motion.p: m
 bad_config "a floor the CAN frame cannot carry" "codec.force.floor: must be a floor in N in [0, 65.535], got 65.536" \
   $'[codec.force]\nfloor = 65.536'
 for inside in $'[codec.motion]\nfilter_hz = 499.9' $'[codec.force]\np = 0.9999' $'[codec.force]\nfloor = 65.535'; do
-  printf '%s\n' "$inside" >"$work/edge.toml"
-  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
-  code=$?
-  check "just inside the codec's range, taken: ${inside//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" \
-    test "$code" -eq 0 -a ! -s "$work/err"
+  taken_config "just inside the codec's range" "$inside"
 done
 "$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
 check "missing file: exit 2" test "$code" -eq 2
