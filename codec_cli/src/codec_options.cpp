@@ -2,28 +2,17 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <string>
 
 #include "lever/program/choices.hpp"
+#include "lever/program/config_schema.hpp"
 
 namespace lever::codec_cli {
 namespace {
 
-// Each parameter's name, range, help, field and step below: a new codec::Config field is one more case in each,
-// and the compiler names every switch that lacks it.
-std::string_view base_name(Param param) {
-  switch (param) {
-    case Param::mode:
-      return "mode";
-    case Param::p:
-      return "p";
-    case Param::floor:
-      return "floor";
-    case Param::filter_hz:
-      return "filter-hz";
-  }
-  return "unknown";
-}
+// Each parameter's range, description, field and step below, and its name in key_name: a new codec::Config field
+// is one more case in each, and the compiler names every switch that lacks it.
 
 // A number parameter's range; `what` keeps the text the floor's range is named by (it names the signal's unit).
 program::Bounds bounds(Param param, const Signal& signal, const Limits& limits, std::string& what) {
@@ -46,19 +35,26 @@ bool admits(Param param, double value, const Signal& signal, const Limits& limit
   return !program::check_number(value, bounds(param, signal, limits, what));
 }
 
-std::string what_it_is(Param param, const Signal& signal, const Limits& limits) {
+// What a parameter is, said once for both syntaxes: an option's help reads "WHAT in UNIT REMARK", a key's
+// documentation "UNIT: WHAT REMARK", as the schema prints every key's unit in a place of its own.
+struct Description {
+  std::string what;
+  std::string_view unit;
+  std::string remark;
+};
+
+Description description(Param param, const Signal& signal, const Limits& limits) {
   switch (param) {
     case Param::mode:
-      return "deadband (zero-order hold) or predictive (linear predictor)";
+      return {"deadband (zero-order hold) or predictive (linear predictor)", {}, {}};
     case Param::p:
-      return "Weber fraction p, the relative deadband (0.1: 10 %)";
+      return {"Weber fraction p, the relative deadband (0.1: 10 %)", {}, {}};
     case Param::floor:
-      return fmt::format("absolute deadband floor in {}{}", signal.unit,
-                         limits.floor_zero ? " (0: the paper's rule)" : "");
+      return {"absolute deadband floor", signal.unit, limits.floor_zero ? " (0: the paper's rule)" : ""};
     case Param::filter_hz:
-      return fmt::format("low-pass prefilter cut-off in Hz{}{}",
-                         admits(param, 0.0, signal, limits) ? " (0: off)" : " (default: off)",
-                         limits.filter_note.empty() ? "" : fmt::format(", {}", limits.filter_note));
+      return {"low-pass prefilter cut-off", "Hz",
+              fmt::format("{}{}", admits(param, 0.0, signal, limits) ? " (0: off)" : " (default: off)",
+                          limits.filter_note.empty() ? "" : fmt::format(", {}", limits.filter_note))};
   }
   return {};
 }
@@ -93,8 +89,9 @@ auto& number_field(Config& config, Param param) {
 }
 
 std::string help(Param param, const Signal& signal, const Limits& limits) {
+  const Description d = description(param, signal, limits);
   std::string text = signal.scope.empty() ? "" : fmt::format("{}: ", signal.scope);
-  text += what_it_is(param, signal, limits);
+  text += d.what + (d.unit.empty() ? "" : fmt::format(" in {}", d.unit)) + d.remark;
   if (limits.wire_steps && wire_step(param) > 0.0)
     text += fmt::format(", sent in steps of {}", program::short_number(wire_step(param)));
   return text;
@@ -125,8 +122,39 @@ std::string shown_default(Param param, const codec::Config<double>& config, cons
 
 }  // namespace
 
+std::string_view key_name(Param param) {
+  switch (param) {
+    case Param::mode:
+      return "mode";
+    case Param::p:
+      return "p";
+    case Param::floor:
+      return "floor";
+    case Param::filter_hz:
+      return "filter_hz";
+  }
+  return "unknown";
+}
+
 std::string option_name(Param param, const Signal& signal) {
-  return fmt::format("--{}{}", base_name(param), signal.suffix);
+  std::string name(key_name(param));
+  std::replace(name.begin(), name.end(), '_', '-');
+  return fmt::format("--{}{}", name, signal.suffix);
+}
+
+void bind_keys(program::ConfigSchema& schema, const std::string& section, codec::Config<double>& config,
+               const Signal& signal, const Limits& limits) {
+  for (const Param param : kAllParams) {
+    const std::string key = fmt::format("{}.{}", section, key_name(param));
+    const Description d = description(param, signal, limits);
+    if (param == Param::mode) {
+      schema.choice(key, config.mode, modes(), d.what + d.remark);
+      continue;
+    }
+    std::string what;
+    schema.number(key, number_field(config, param), bounds(param, signal, limits, what), std::string(d.unit),
+                  d.what + d.remark);
+  }
 }
 
 void add_options(CLI::App& app, codec::Config<double>& config, const Signal& signal, const Limits& limits, Params which,

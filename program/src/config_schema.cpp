@@ -108,6 +108,11 @@ std::optional<std::string> ConfigSchema::read_text_value(const toml::node& n, Em
 
 std::optional<std::string> ConfigSchema::read_number(const toml::node& n, double lo, double hi, const std::string& unit,
                                                      double& out) {
+  const std::string what = unit.empty() ? "a number" : "a number of " + unit;
+  return read_number(n, Bounds{lo, hi, false, false, what}, out);
+}
+
+std::optional<std::string> ConfigSchema::read_number(const toml::node& n, const Bounds& bounds, double& out) {
   double v = 0.0;
   if (const auto* f = n.as_floating_point()) {
     v = f->get();
@@ -117,8 +122,7 @@ std::optional<std::string> ConfigSchema::read_number(const toml::node& n, double
     return "must be a number, got " + type_name(n);
   }
   // The same check, and the same words, as the programs' numeric options.
-  const std::string what = unit.empty() ? "a number" : "a number of " + unit;
-  if (auto e = program::check_number(v, {lo, hi, false, false, what})) return e;
+  if (auto e = program::check_number(v, bounds)) return e;
   out = v;
   return std::nullopt;
 }
@@ -138,6 +142,17 @@ std::string ConfigSchema::number_text(double v) {
 void ConfigSchema::number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc) {
   add({std::move(key), unit, std::move(doc),
        [&value, lo, hi, unit](const toml::node& n) { return read_number(n, lo, hi, unit, value); },
+       [&value] { return number_text(value); }});
+}
+
+void ConfigSchema::number(std::string key, double& value, const Bounds& bounds, std::string unit, std::string doc) {
+  add({std::move(key), std::move(unit), std::move(doc),
+       // The load runs after the caller's text for bounds.what may be gone: it keeps a copy.
+       [&value, bounds, what = std::string(bounds.what)](const toml::node& n) {
+         Bounds own = bounds;
+         own.what = what;
+         return read_number(n, own, value);
+       },
        [&value] { return number_text(value); }});
 }
 

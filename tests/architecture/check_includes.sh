@@ -16,7 +16,7 @@ rules=(
   "firmware/core|codec common math protocol fw"
   "firmware/mcu|codec common math protocol fw"
   "board|codec common math protocol fw board"
-  "firmware/app|codec common math protocol fw board program app"
+  "firmware/app|codec common math protocol fw board program codec_cli app"
   "host/codec_tool|codec common math protocol program codec_cli"
   "host/bridge|codec common math protocol board program"
   "host/ctl|codec common math protocol board program codec_cli"

@@ -165,7 +165,7 @@ num "lever-bridge --realtime-priority 1.5" "--realtime-priority must be a whole 
 expect 2 "lever-bridge: misspelt subcommand" "unknown subcommand 'kegen'; expected keygen" "$bridge" kegen
 # The same check for configuration keys (lever-fw's TOML, read by lever-fw and lever-hil serve).
 printf '[codec.force]\np = nan\n' >"$work/nan.toml"
-expect 2 "config key NaN" "codec.force.p: must be a number in [0, 6.5535], got nan" "$fw" --config "$work/nan.toml" --check-config
+expect 2 "config key NaN" "codec.force.p: must be a fraction in [0, 1), got nan" "$fw" --config "$work/nan.toml" --check-config
 printf '[safety]\ntorque_limit_nm = 1e300\n' >"$work/big.toml"
 expect 2 "config key 1e300" "safety.torque_limit_nm: must be a number of N m in" "$fw" --config "$work/big.toml" --check-config
 check "config key 1e300: short numbers" bash -c "! grep -qE '[0-9]{20}' '$work/err'"

@@ -17,6 +17,12 @@ bad_config() {  # NAME EXPECTED_MESSAGE TOML
   check "$name: says '$expected'" grep -qF -- "$expected" "$work/err"
   check "$name: prints no configuration" test ! -s "$work/out"
 }
+taken_config() {  # WHY TOML: a configuration just inside a bound, which must load without a word
+  printf '%s\n' "$2" >"$work/edge.toml"
+  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
+  local code=$?
+  check "$1, taken: ${2//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" test "$code" -eq 0 -a ! -s "$work/err"
+}
 
 "$fw" --help >"$work/help"; check "--help exits 0" test $? -eq 0
 check "--help documents the board's options" grep -q -- "--motor-off" "$work/help"
@@ -42,7 +48,7 @@ bad_config "a value given as a table" "lever.role: must be a string, got a table
 bad_config "wrong type" "lever.pair: must be a whole number in [0, 15], got a string" $'[lever]\npair = "one"'
 bad_config "out of range" "link.comms_timeout_ms: must be a whole number in [1, 60000], got 0" $'[link]\ncomms_timeout_ms = 0'
 bad_config "fraction where a whole number belongs" "got 2.5" $'[link]\nheartbeat_ms = 2.5'
-bad_config "NaN" "codec.force.p: must be a number in [0, 6.5535], got nan" $'[codec.force]\np = nan'
+bad_config "NaN" "codec.force.p: must be a fraction in [0, 1), got nan" $'[codec.force]\np = nan'
 bad_config "infinity" "safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = inf'
 bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, index, got 'magnet'" $'[homing]\nmethod = "magnet"'
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
@@ -59,11 +65,7 @@ bad_config "POSITION_LIMIT certain once homed" "homing.home_position_rad: -1.01 
   $'[homing]\nhome_position_rad = -1.01'
 for relation in $'[link]\ncomms_timeout_ms = 26' $'[homing]\ntimeout_ms = 101' $'[homing]\nhome_position_rad = -1.0' \
   $'[homing]\nmethod = "absolute"\nhome_position_rad = -1.01'; do
-  printf '%s\n' "$relation" >"$work/edge.toml"
-  "$fw" --config "$work/edge.toml" --check-config >/dev/null 2>"$work/err"
-  code=$?
-  check "just inside the relation, taken: ${relation//$'\n'/; } (exit $code: $(head -c 200 "$work/err"))" \
-    test "$code" -eq 0 -a ! -s "$work/err"
+  taken_config "just inside the relation" "$relation"
 done
 # The velocity estimate's 1 ms Euler step is stable below b T = 2 sqrt(2) - 2 (828.4 rad/s): 828 taken, 829 refused.
 bad_config "a velocity estimate past its stability limit" "velocity.bandwidth_rad_s: must be a number of rad/s in [1, 828], got 829" \
@@ -85,6 +87,18 @@ check "RTU with a window that outlasts one missed poll: valid ($(cat "$work/err"
 bad_config "a saturation bound the register never reaches" "saturation would never be seen" \
   $'[board.gauge]\nsaturation_raw_max = 1e15'
 bad_config "a prefilter above Nyquist" "codec.motion.filter_hz" $'[codec.motion]\nfilter_hz = 800'
+# The codec's keys take what lever-ctl set-deadband's options take (codec_cli's kOnWire), in the options' words.
+bad_config "a prefilter at Nyquist" \
+  "codec.motion.filter_hz: must be a cut-off in Hz below Nyquist (500 Hz at 1 kHz) in [0, 500), got 500" \
+  $'[codec.motion]\nfilter_hz = 500'
+bad_config "a Weber fraction above 1" "codec.force.p: must be a fraction in [0, 1), got 1.5" $'[codec.force]\np = 1.5'
+bad_config "a Weber fraction of 1 (no change ever perceived)" "codec.motion.p: must be a fraction in [0, 1), got 1" \
+  $'[codec.motion]\np = 1'
+bad_config "a floor the CAN frame cannot carry" "codec.force.floor: must be a floor in N in [0, 65.535], got 65.536" \
+  $'[codec.force]\nfloor = 65.536'
+for inside in $'[codec.motion]\nfilter_hz = 499.9' $'[codec.force]\np = 0.9999' $'[codec.force]\nfloor = 65.535'; do
+  taken_config "just inside the codec's range" "$inside"
+done
 "$fw" --config "$work/missing.toml" --check-config 2>"$work/err"; code=$?
 check "missing file: exit 2" test "$code" -eq 2
 check "missing file: says why" grep -q "missing.toml: cannot read: No such file" "$work/err"
@@ -130,6 +144,13 @@ for role in hsi top; do
   check "example $role.toml: the printed configuration loads back to itself" cmp -s "$work/$role.toml" "$work/$role.again"
   check "example $role.toml: role $role" grep -q "^role = \"$role\"" "$work/$role.toml"
 done
+# The examples list every key at its default as the program prints it, help included (docs/lever-fw.md).
+for example in hsi top top-float32; do
+  "$fw" --config "$examples/$example.toml" --check-config | grep -v -e '^#' -e '^$' >"$work/printed"
+  grep -v -e '^#' -e '^$' "$examples/$example.toml" >"$work/example"
+  check "example $example.toml is what --check-config prints ($(diff "$work/example" "$work/printed" | head -c 300))" \
+    cmp -s "$work/example" "$work/printed"
+done
 # --get KEY: one key's effective value, as the shell tests read a configuration (no TOML parsing of their own).
 check "--get a number" test "$("$fw" --config "$examples/top.toml" --get control.position.kp_nm_per_rad)" = 40.0
 check "--get a string, bare" test "$("$fw" --config "$examples/top.toml" --get lever.role)" = top
@@ -162,6 +183,10 @@ getset_bad "--set out of range" "--set: link.comms_timeout_ms: must be a whole n
 getset_bad "--set a string without its quotes" "is no TOML value (a string needs its quotes" \
   --set board.can.interface=vcan3 --check-config
 getset_bad "--set an unknown key" "--set: codec.motion.q: unknown key" --set codec.motion.q=1 --check-config
+getset_bad "--set a Weber fraction above 1" "--set: codec.motion.p: must be a fraction in [0, 1), got 1.5" \
+  --set codec.motion.p=1.5 --check-config
+getset_bad "--set a prefilter at Nyquist" "--set: codec.force.filter_hz: must be a cut-off in Hz below Nyquist" \
+  --set codec.force.filter_hz=500 --check-config
 getset_bad "--set without =" "expected KEY=VALUE" --set codec.motion.p --check-config
 getset_bad "--set with --motor-off, which reads the file's motor keys alone" "excludes" \
   --set board.motor.pwm_chip=1 --motor-off

@@ -1,8 +1,14 @@
-// The codec's options as every program declares them (codec_cli/): names, ranges, defaults, overrides.
+// The codec's options as every program declares them (codec_cli/): names, ranges, defaults, overrides; and its
+// keys as a configuration file declares them, with the options' ranges.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "lever/codec_cli/codec_options.hpp"
+#include "lever/program/config_schema.hpp"
 
 namespace codec_cli = lever::codec_cli;
 using codec_cli::Param;
@@ -99,4 +105,77 @@ TEST_CASE("a program that sends the values says the steps the frame rounds them 
   CHECK(app.get_option("--floor")->get_description().find("steps of 0.001") != std::string::npos);
   CHECK(app.get_option("--filter-hz")->get_description().find("steps of 0.1") != std::string::npos);
   CHECK(app.get_option("--mode")->get_description().find("steps") == std::string::npos);
+}
+
+namespace {
+
+// The schema's words for the first refused key, or "" when the text loads.
+std::string key_refusal(lever::program::ConfigSchema& schema, const std::string& toml) {
+  return schema.load_string(toml, "f.toml").value_or("");
+}
+
+// "must be a fraction in [0, 1)": a refusal's words up to the value, which an option quotes as typed and a key
+// prints as the number it read.
+std::string range_words(const std::string& refusal) {
+  const auto must = refusal.find("must be");
+  return must == std::string::npos ? refusal : refusal.substr(must, refusal.rfind(", got") - must);
+}
+
+}  // namespace
+
+TEST_CASE("a configuration file's keys are the options' names in TOML's spelling, with their help") {
+  lever::program::ConfigSchema schema;
+  Config<double> config;
+  codec_cli::bind_keys(schema, "codec.force", config, codec_cli::kForce, codec_cli::kOnWire);
+  CHECK(schema.keys("codec.force.") ==
+        std::vector<std::string>{"codec.force.mode", "codec.force.p", "codec.force.floor", "codec.force.filter_hz"});
+  CHECK(codec_cli::option_name(Param::filter_hz, codec_cli::kForce) == "--filter-hz-force");
+  // The unit has a place of its own in a printed key; an option says it in its help.
+  const std::string printed = schema.print();
+  CHECK(printed.find("floor = 0.0  # N: absolute deadband floor (0: the paper's rule)\n") != std::string::npos);
+  CHECK(printed.find("filter_hz = 0.0  # Hz: low-pass prefilter cut-off (0: off)\n") != std::string::npos);
+  CHECK(printed.find("p = 0.1  # Weber fraction p, the relative deadband (0.1: 10 %)\n") != std::string::npos);
+  CLI::App app;
+  codec_cli::add_options(app, config, codec_cli::kForce, codec_cli::kOnWire);
+  CHECK(app.get_option("--floor-force")->get_description() ==
+        "TOP->HSI force: absolute deadband floor in N (0: the paper's rule)");
+  REQUIRE(key_refusal(schema, "[codec.force]\nmode = \"predictive\"\np = 0.2\nfloor = 0.5\nfilter_hz = 30") == "");
+  CHECK(config.mode == Mode::predictive);
+  CHECK(config.p == 0.2);
+  CHECK(config.floor == 0.5);
+  CHECK(config.filter_hz == 30.0);
+}
+
+TEST_CASE("a key refuses what its option refuses, a number in the same words, at every bound") {
+  codec_cli::Limits no_zero_floor = codec_cli::kOnWire;
+  no_zero_floor.floor_zero = false;
+  const std::pair<const char*, codec_cli::Limits> every_limits[] = {{"kOnWire", codec_cli::kOnWire},
+                                                                    {"kSentOverCan", codec_cli::kSentOverCan},
+                                                                    {"kOffline", codec_cli::kOffline},
+                                                                    {"a floor above 0", no_zero_floor}};
+  // Each bound of every range, a step inside and outside it, and what no range takes.
+  const std::vector<std::string> numbers = {"-1",    "-0.0001", "0",      "0.0001", "0.5",    "0.9999",
+                                            "1",     "1.5",     "6.5535", "7",      "65.535", "65.536",
+                                            "499.9", "500",     "500.1",  "1e300",  "nan",    "inf"};
+  const std::vector<std::string> modes = {"deadband", "predictive", "bogus"};
+  for (const auto& [limits_name, limits] : every_limits) {
+    for (const Param param : codec_cli::kAllParams) {
+      const bool is_mode = param == Param::mode;
+      for (const std::string& value : is_mode ? modes : numbers) {
+        CAPTURE(limits_name, codec_cli::key_name(param), value);
+        CLI::App app;
+        Config<double> from_options, from_file;
+        codec_cli::add_options(app, from_options, codec_cli::kVelocity, limits);
+        lever::program::ConfigSchema schema;
+        codec_cli::bind_keys(schema, "codec.motion", from_file, codec_cli::kVelocity, limits);
+        const std::string by_option = refusal(app, codec_cli::option_name(param, codec_cli::kVelocity) + " " + value);
+        const std::string by_key = key_refusal(
+            schema,
+            fmt::format("[codec.motion]\n{} = {}", codec_cli::key_name(param), is_mode ? '"' + value + '"' : value));
+        CHECK(by_option.empty() == by_key.empty());
+        // A choice's list reads as each syntax lists all its choices ("deadband or predictive" on a command line).
+        if (!is_mode) CHECK(range_words(by_option) == range_words(by_key));
+      }
+    }
+  }
 }

@@ -9,6 +9,7 @@
 
 #include "lever/app/board_keys.hpp"
 #include "lever/board/modbus_gauge_presets.hpp"
+#include "lever/codec_cli/codec_options.hpp"
 #include "lever/program/choices.hpp"
 #include "lever/program/text.hpp"
 
@@ -18,22 +19,7 @@ namespace {
 // Polls in a row that may fail without the force going stale (docs/modbus-gauge.md, "Timing").
 constexpr int kMissedPollsTolerated = 1;
 
-using codec::Mode;
 using fw::Tick;
-
-const program::ConfigSchema::Choices<Mode> kModes = [] {
-  program::ConfigSchema::Choices<Mode> modes;
-  for (const Mode m : codec::kAllModes) modes.emplace_back(codec::name(m), m);
-  return modes;
-}();
-
-void bind_codec(program::ConfigSchema& s, const std::string& section, codec::Config<double>& c,
-                const std::string& unit) {
-  s.choice(section + ".mode", c.mode, kModes, "reference: last value sent (deadband) or the linear predictor");
-  s.number(section + ".p", c.p, 0.0, 6.5535, "", "Weber fraction: a sample is sent when it differs by more than p");
-  s.number(section + ".floor", c.floor, 0.0, 65.535, unit, "absolute deadband floor (0: the paper's rule)");
-  s.number(section + ".filter_hz", c.filter_hz, 0.0, 500.0, "Hz", "prefilter cut-off, below Nyquist (0: off)");
-}
 
 void bind_lever(program::ConfigSchema& s, fw::LeverConfig& l) {
   s.choice("lever.role", l.role, {{"hsi", protocol::Role::hsi}, {"top", protocol::Role::top}},
@@ -49,13 +35,15 @@ void bind_link(program::ConfigSchema& s, fw::LeverConfig& l) {
             "a frame that brings a stream to rest is sent again this much later (0: never)");
 }
 
+// The values a lever applies and confirms over CAN, in the ranges lever-ctl set-deadband sends: a file gives a lever
+// no value a command could not.
 void bind_codecs(program::ConfigSchema& s, fw::LeverConfig& l) {
-  bind_codec(s, "codec.motion", l.motion_codec, "rad/s");
+  codec_cli::bind_keys(s, "codec.motion", l.motion_codec, codec_cli::kVelocity, codec_cli::kOnWire);
   s.choice("codec.motion.velocity", l.motion_velocity,
            {{fw::name(fw::MotionVelocity::difference), fw::MotionVelocity::difference},
             {fw::name(fw::MotionVelocity::estimate), fw::MotionVelocity::estimate}},
            "HSI sends the quantized position's backward difference (the paper's; 0 at rest) or the velocity estimate");
-  bind_codec(s, "codec.force", l.force_codec, "N");
+  codec_cli::bind_keys(s, "codec.force", l.force_codec, codec_cli::kForce, codec_cli::kOnWire);
 }
 
 void bind_encoder_and_velocity(program::ConfigSchema& s, fw::LeverConfig& l) {

@@ -1,8 +1,9 @@
 #pragma once
-// The codec's command-line options (--mode, --p, --floor, --filter-hz), declared once for lever-codec, lever-ctl
-// set-deadband and lever-hil run and sweep (issue 40): a codec::Config field becomes an option in each of them by
-// one case here, with the same name, range and help everywhere. What legitimately differs between programs (the
-// floor the CAN frame can carry, a cut-off checked against a trace's own rate) is a Limits, named at the call.
+// The codec's parameters (mode, p, floor, filter_hz), declared once (issue 40): as command-line options for
+// lever-codec, lever-ctl set-deadband and lever-hil run and sweep, and as the configuration keys of lever-fw's file.
+// A codec::Config field becomes an option in each program and a key in each file by one case here, with the same
+// name, range and help everywhere. What legitimately differs between programs (the floor the CAN frame can carry,
+// a cut-off checked against a trace's own rate) is a Limits, named at the call.
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <initializer_list>
@@ -14,6 +15,10 @@
 #include "lever/codec/config.hpp"
 #include "lever/program/numbers.hpp"
 #include "lever/protocol/messages.hpp"
+
+namespace lever::program {
+class ConfigSchema;
+}
 
 namespace lever::codec_cli {
 
@@ -69,7 +74,9 @@ inline constexpr Limits kSentOverCan{.floor_max = kOnWire.floor_max, .wire_steps
 inline constexpr Limits kOffline{.filter_hz = {0.0, program::kUnbounded, true, false, "a cut-off in Hz"},
                                  .filter_note = "below the trace's Nyquist frequency"};
 
-// "--p-velocity".
+// "filter_hz": the parameter's name, a configuration file's key in TOML's spelling.
+std::string_view key_name(Param param);
+// "--filter-hz-velocity": the same name in a command line's spelling, with the signal's suffix.
 std::string option_name(Param param, const Signal& signal);
 
 // Adds the options `which` for one signal, bound to config's fields. Each shows its value in config as the default,
@@ -77,6 +84,11 @@ std::string option_name(Param param, const Signal& signal);
 // `note` ends each help text ("of the +floor variant").
 void add_options(CLI::App& app, codec::Config<double>& config, const Signal& signal, const Limits& limits,
                  Params which = kAll, std::string_view note = {});
+
+// Binds every parameter of one signal as a key of `section` ("codec.motion.p"), to config's fields, with the
+// options' ranges and help. The section names the signal in a file, so the help does not (no signal.scope).
+void bind_keys(program::ConfigSchema& schema, const std::string& section, codec::Config<double>& config,
+               const Signal& signal, const Limits& limits);
 
 // One signal's values that override the options without its suffix (--p-velocity over --p): unset unless given.
 struct Overrides {

@@ -21,6 +21,8 @@
 
 namespace lever::program {
 
+struct Bounds;  // numbers.hpp
+
 class ConfigSchema {
  public:
   // A choice's names and values, e.g. {{"hsi", Role::hsi}, {"top", Role::top}}.
@@ -35,6 +37,9 @@ class ConfigSchema {
   enum class Empty { allowed, refused };
 
   void number(std::string key, double& value, double lo, double hi, std::string unit, std::string doc);
+  // A range that may be open at an end (a cut-off below Nyquist) and names its values itself ("a fraction"): a key
+  // that is also an option, refused in the option's words.
+  void number(std::string key, double& value, const Bounds& bounds, std::string unit, std::string doc);
   // Whole numbers: a TOML integer, or a float with no fractional part, in [lo, hi]. Int is any arithmetic type
   // that holds the range (a bit rate kept in a double is still whole in the file).
   template <typename Int>
@@ -170,6 +175,7 @@ class ConfigSchema {
   // The fields' checks, for a custom load: each stores into `out` or returns the problem, in the fields' words.
   static std::optional<std::string> read_number(const toml::node& n, double lo, double hi, const std::string& unit,
                                                 double& out);
+  static std::optional<std::string> read_number(const toml::node& n, const Bounds& bounds, double& out);
   static std::optional<std::string> read_integer(const toml::node& n, std::int64_t lo, std::int64_t hi,
                                                  std::int64_t& out);
   static std::optional<std::string> read_text(const toml::node& n, std::string& out);
