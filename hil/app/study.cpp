@@ -249,7 +249,7 @@ class Session {
     if (!why.empty()) return why;
     for (const auto role : {Role::hsi, Role::top}) {
       const auto& seen = pair_.watch().lever(role);
-      if (seen.settings && !study::same_settings(*seen.settings, confirmed_[static_cast<std::size_t>(role)]))
+      if (seen.settings && !protocol::same_codec_settings(*seen.settings, confirmed_[static_cast<std::size_t>(role)]))
         return fmt::format("the {}'s settings changed to {}", study::role_name(role), study::describe(*seen.settings));
     }
     return {};

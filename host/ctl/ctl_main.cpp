@@ -132,10 +132,7 @@ class Session {
     m.opcode = lever::ctl::opcode(verb);
     if (verb == Verb::set_deadband) {
       m.direction = o.direction;
-      m.mode = o.codec.mode;
-      m.p = static_cast<std::uint16_t>(std::lround(o.codec.p / protocol::kPLsb));
-      m.floor = static_cast<std::uint16_t>(std::lround(o.codec.floor / protocol::kFloorLsb));
-      m.filter_hz = static_cast<std::uint16_t>(std::lround(o.codec.filter_hz / protocol::kFilterHzLsb));
+      protocol::set_codec_settings(m, o.codec);
     }
     return m;
   }

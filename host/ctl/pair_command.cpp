@@ -50,16 +50,16 @@ bool counter_newer(std::uint8_t before, std::uint8_t now) noexcept {
 }
 
 bool shows(const protocol::SettingsMessage& s, const protocol::CommandMessage& c) noexcept {
-  return s.mode == c.mode && s.p == c.p && s.floor == c.floor && s.filter_hz == c.filter_hz;
+  return protocol::same_codec_settings(s, c);
 }
 
 std::string describe(const protocol::SettingsMessage& s, protocol::Role role) {
   const bool top = role == protocol::Role::top;
-  const std::string filter =
-      s.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", s.filter_hz * protocol::kFilterHzLsb);
+  const auto c = protocol::codec_settings(s);
+  const std::string filter = s.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", c.filter_hz);
   return fmt::format("{}: {} p {:.4f}, floor {:.3f} {}, filter {}; changes {}, tares {}{}", top ? "force" : "motion",
-                     codec::name(s.mode), s.p * protocol::kPLsb, s.floor * protocol::kFloorLsb, top ? "N" : "rad/s",
-                     filter, s.changes, s.tares, s.taring ? ", taring" : "");
+                     codec::name(c.mode), c.p, c.floor, top ? "N" : "rad/s", filter, s.changes, s.tares,
+                     s.taring ? ", taring" : "");
 }
 
 Judgement judge_settings(Verb verb, const protocol::SettingsMessage& before, const protocol::SettingsMessage& newest,

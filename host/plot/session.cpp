@@ -27,10 +27,11 @@ constexpr double kMaxSpan = 86400.0;
 
 // "force: predictive p 0.1000 floor 0.050 N filter 30.0 Hz (changes 2, tares 1)": a lever's settings frame, read.
 std::string settings_text(const proto::SettingsMessage& m, bool top) {
-  std::string filter = m.filter_hz == 0 ? "off" : fmt::format("{:.1f} Hz", m.filter_hz * proto::kFilterHzLsb);
+  const auto c = proto::codec_settings(m);
+  std::string filter = m.filter_hz == 0 ? "off" : fmt::format("{:.1f} Hz", c.filter_hz);
   return fmt::format("{}: {} p {:.4f} floor {:.3f} {} filter {} (changes {}, tares {}{})", top ? "force" : "motion",
-                     codec::name(m.mode), m.p * proto::kPLsb, m.floor * proto::kFloorLsb, top ? "N" : "rad/s", filter,
-                     m.changes, m.tares, m.taring ? ", taring" : "");
+                     codec::name(c.mode), c.p, c.floor, top ? "N" : "rad/s", filter, m.changes, m.tares,
+                     m.taring ? ", taring" : "");
 }
 
 std::string num(double v) { return std::isnan(v) ? "" : fmt::format("{:.6g}", v); }
@@ -176,10 +177,10 @@ struct LogReader {
       s.settings_seen.push_back(fmt::format("{:.3f} s {} {}", t, sender ? "TOP" : "HSI", shown));
       settings[sender] = shown;
     }
+    const auto c = proto::codec_settings(m);
     return {proto::DecodeError::none,
             fmt::format("{},,,,,,,,,{:d},,,,,,,,{:.4f},{:.3f},{:.1f},{},{},{:d}\n", sender ? "top" : "hsi",
-                        m.mode == codec::Mode::predictive, m.p * proto::kPLsb, m.floor * proto::kFloorLsb,
-                        m.filter_hz * proto::kFilterHzLsb, m.changes, m.tares, m.taring),
+                        c.mode == codec::Mode::predictive, c.p, c.floor, c.filter_hz, m.changes, m.tares, m.taring),
             sender};
   }
 

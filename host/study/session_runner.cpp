@@ -299,7 +299,7 @@ class Runner {
     for (const auto role : {Role::hsi, Role::top}) {
       const auto& seen = io_.watch().lever(role);
       const auto& want = confirmed_[static_cast<std::size_t>(role)];
-      if (seen.settings && !same_settings(*seen.settings, want))
+      if (seen.settings && !protocol::same_codec_settings(*seen.settings, want))
         return fmt::format("the {}'s settings changed to {}", role_name(role), describe(*seen.settings));
     }
     return {};
@@ -417,7 +417,7 @@ class Runner {
       for (const auto d : kDirections) {
         const auto& want = baseline_[static_cast<std::size_t>(d)];
         const auto& seen = io_.watch().lever(sender_of(d));
-        if (seen.settings && same_settings(*seen.settings, want)) continue;
+        if (seen.settings && protocol::same_codec_settings(*seen.settings, want)) continue;
         bool taken = false;
         const auto failed = confirm(d, want, taken);
         if (failed || !taken)

@@ -67,10 +67,10 @@ void lever_row(std::vector<Line>& out, const PairView& pair, Role role) {
 std::string settings_text(const LeverView& sender, const char* unit) {
   if (!sender.settings) return "settings not heard";
   const auto& m = *sender.settings;
-  const std::string filter =
-      m.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", m.filter_hz * protocol::kFilterHzLsb);
-  return fmt::format("{} p {:.2f} % floor {:.3f} {} filter {}{}", codec::name(m.mode), 100.0 * m.p * protocol::kPLsb,
-                     m.floor * protocol::kFloorLsb, unit, filter, m.taring ? "  taring" : "");
+  const auto c = protocol::codec_settings(m);
+  const std::string filter = m.filter_hz == 0 ? std::string("off") : fmt::format("{:.1f} Hz", c.filter_hz);
+  return fmt::format("{} p {:.2f} % floor {:.3f} {} filter {}{}", codec::name(c.mode), 100.0 * c.p, c.floor, unit,
+                     filter, m.taring ? "  taring" : "");
 }
 
 void direction_row(std::vector<Line>& out, const char* name, const DirectionView& d, const LeverView& sender,

@@ -34,10 +34,11 @@ json lever(const LeverView& l) {
   out["settings_frames"] = l.settings_frames;
   if (l.settings) {
     const auto& m = *l.settings;
-    out["settings"] = {{"mode", std::string(codec::name(m.mode))},
-                       {"p", m.p * protocol::kPLsb},
-                       {"floor", m.floor * protocol::kFloorLsb},
-                       {"filter_hz", m.filter_hz * protocol::kFilterHzLsb},
+    const auto c = protocol::codec_settings(m);
+    out["settings"] = {{"mode", std::string(codec::name(c.mode))},
+                       {"p", c.p},
+                       {"floor", c.floor},
+                       {"filter_hz", c.filter_hz},
                        {"changes", m.changes},
                        {"tares", m.tares},
                        {"taring", m.taring}};

@@ -292,6 +292,41 @@ TEST_CASE("a parameter becomes the nearest code of its field, clipped", "[protoc
   }
 }
 
+TEST_CASE("the codec's settings: the command and the settings frame carry them alike, each way by one conversion",
+          "[protocol]") {
+  const lever::codec::Config<double> wanted{lever::codec::Mode::predictive, 0.12345, 0.05, 30.0};
+  CommandMessage command;
+  set_codec_settings(command, wanted);
+  CHECK(command.mode == lever::codec::Mode::predictive);
+  CHECK(command.p == 1235);  // the nearest step, as unsigned_code
+  CHECK(command.floor == 50);
+  CHECK(command.filter_hz == 300);
+  SettingsMessage settings;
+  settings.changes = 7;  // not a codec setting: neither set nor compared
+  set_codec_settings(settings, codec_settings(command));
+  CHECK(settings.changes == 7);
+  CHECK(same_codec_settings(settings, command));
+  const auto read = codec_settings(settings);
+  CHECK(read.mode == lever::codec::Mode::predictive);
+  CHECK(read.p == Approx(0.1235));
+  CHECK(read.floor == Approx(0.05));
+  CHECK(read.filter_hz == Approx(30.0));
+  // Each field is compared: one step apart in any of them is another setting.
+  for (int field = 0; field < 4; ++field) {
+    SettingsMessage other = settings;
+    if (field == 0) other.mode = lever::codec::Mode::deadband;
+    if (field == 1) ++other.p;
+    if (field == 2) ++other.floor;
+    if (field == 3) ++other.filter_hz;
+    CHECK_FALSE(same_codec_settings(other, command));
+  }
+  // Past its field, a value is its field's largest step (a configuration may hold more range than a frame).
+  set_codec_settings(command, {lever::codec::Mode::deadband, 10.0, 100.0, 10000.0});
+  CHECK(command.p == 65535);
+  CHECK(command.floor == 65535);
+  CHECK(command.filter_hz == 65535);
+}
+
 TEST_CASE("fault names: every known bit by its name in table order, unknown bits in hex, one separator", "[protocol]") {
   CHECK(fault_names(0, ", ", "none") == "none");
   CHECK(fault_names(0, "+").empty());

@@ -64,8 +64,9 @@ std::string PairWatch::not_ready(std::int64_t now_us) const {
 protocol::SettingsMessage settings_for(const Interval& interval, protocol::Direction d,
                                        const protocol::SettingsMessage& baseline) noexcept {
   protocol::SettingsMessage s = baseline;
-  const double p = d == protocol::Direction::motion ? interval.p_velocity : interval.p_force;
-  s.p = protocol::unsigned_code(p, protocol::kPLsb);
+  codec::Config<double> c = protocol::codec_settings(baseline);
+  c.p = d == protocol::Direction::motion ? interval.p_velocity : interval.p_force;
+  protocol::set_codec_settings(s, c);
   return s;
 }
 
@@ -75,37 +76,30 @@ protocol::CommandMessage command_for(protocol::Direction d, const protocol::Sett
   m.to_hsi = sender_of(d) == protocol::Role::hsi;
   m.to_top = !m.to_hsi;
   m.direction = d;
-  m.mode = wanted.mode;
-  m.p = wanted.p;
-  m.floor = wanted.floor;
-  m.filter_hz = wanted.filter_hz;
+  protocol::set_codec_settings(m, protocol::codec_settings(wanted));
   return m;
-}
-
-bool same_settings(const protocol::SettingsMessage& a, const protocol::SettingsMessage& b) noexcept {
-  return a.mode == b.mode && a.p == b.p && a.floor == b.floor && a.filter_hz == b.filter_hz;
 }
 
 bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before,
               const protocol::SettingsMessage& wanted) noexcept {
-  return seen.changes != changes_before && same_settings(seen, wanted);
+  return seen.changes != changes_before && protocol::same_codec_settings(seen, wanted);
 }
 
 nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us) {
-  return {{"mode", std::string(codec::name(s.mode))},
-          {"p", s.p * protocol::kPLsb},
-          {"floor", s.floor * protocol::kFloorLsb},
-          {"filter_hz", s.filter_hz * protocol::kFilterHzLsb},
+  const auto c = protocol::codec_settings(s);
+  return {{"mode", std::string(codec::name(c.mode))},
+          {"p", c.p},
+          {"floor", c.floor},
+          {"filter_hz", c.filter_hz},
           {"changes", s.changes},
           {"at_bus_us", at_us}};
 }
 
 std::string describe(const protocol::SettingsMessage& s) {
-  const std::string filter = s.filter_hz == 0
-                                 ? std::string("prefilter off")
-                                 : fmt::format("prefilter {:.1f} Hz", s.filter_hz * protocol::kFilterHzLsb);
-  return fmt::format("p {:.2f} %, floor {:.3f}, {}, {}", s.p * protocol::kPLsb * 100.0, s.floor * protocol::kFloorLsb,
-                     filter, codec::name(s.mode));
+  const auto c = protocol::codec_settings(s);
+  const std::string filter =
+      s.filter_hz == 0 ? std::string("prefilter off") : fmt::format("prefilter {:.1f} Hz", c.filter_hz);
+  return fmt::format("p {:.2f} %, floor {:.3f}, {}, {}", c.p * 100.0, c.floor, filter, codec::name(c.mode));
 }
 
 }  // namespace lever::study

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <numbers>
 #include <string_view>
+#include <type_traits>
 
 #include "lever/codec/config.hpp"
 #include "lever/protocol/bit_field.hpp"
@@ -265,6 +266,31 @@ struct CommandMessage {
   std::uint16_t floor = 0;      // kFloorLsb
   std::uint16_t filter_hz = 0;  // kFilterHzLsb
 };
+
+// The codec's settings as the set_deadband command and the settings frame both carry them, in kPLsb, kFloorLsb and
+// kFilterHzLsb steps: one conversion each way and one comparison, for the levers and every host that reads or
+// writes them.
+template <typename M>
+concept CarriesCodecSettings = std::is_same_v<M, SettingsMessage> || std::is_same_v<M, CommandMessage>;
+
+template <CarriesCodecSettings M>
+constexpr codec::Config<double> codec_settings(const M& m) noexcept {
+  return {m.mode, m.p * kPLsb, m.floor * kFloorLsb, m.filter_hz * kFilterHzLsb};
+}
+
+// Each value the nearest step, clipped to its field (unsigned_code).
+template <CarriesCodecSettings M>
+constexpr void set_codec_settings(M& m, const codec::Config<double>& c) noexcept {
+  m.mode = c.mode;
+  m.p = unsigned_code(c.p, kPLsb);
+  m.floor = unsigned_code(c.floor, kFloorLsb);
+  m.filter_hz = unsigned_code(c.filter_hz, kFilterHzLsb);
+}
+
+template <CarriesCodecSettings A, CarriesCodecSettings B>
+constexpr bool same_codec_settings(const A& a, const B& b) noexcept {
+  return a.mode == b.mode && a.p == b.p && a.floor == b.floor && a.filter_hz == b.filter_hz;
+}
 
 // ---- Packing: every field fits by construction of the types, so packing cannot fail ----
 

@@ -286,8 +286,7 @@ class Lever {
         if (accepted) gauge_.start_tare();
         break;
       case protocol::Opcode::set_deadband: {
-        const codec::Config<double> c{m.mode, m.p * protocol::kPLsb, m.floor * protocol::kFloorLsb,
-                                      m.filter_hz * protocol::kFilterHzLsb};
+        const codec::Config<double> c = protocol::codec_settings(m);
         // Only the sending end of a direction owns its parameters; the receiving end follows the mode flag
         // carried by the data frames, which switches it at the same sample.
         accepted = codec::is_valid(c) && m.direction == Role::kSends;
@@ -433,13 +432,10 @@ class Lever {
   void transmit_settings(Tick now) noexcept {
     const auto& c = role_.sender().config();
     protocol::SettingsMessage m;
-    m.mode = c.mode;
+    protocol::set_codec_settings(m, c);
     m.changes = static_cast<std::uint8_t>(settings_changes_ % protocol::kSettingsCountModulo);
     m.tares = static_cast<std::uint8_t>(gauge_.state().tares % protocol::kSettingsCountModulo);
     m.taring = gauge_.taring();
-    m.p = protocol::unsigned_code(c.p, protocol::kPLsb);
-    m.floor = protocol::unsigned_code(c.floor, protocol::kFloorLsb);
-    m.filter_hz = protocol::unsigned_code(c.filter_hz, protocol::kFilterHzLsb);
     if (now < next_settings_ && m == last_settings_) return;
     send(protocol::pack(m, config_.pair, Role::kRole));
     ++counters_.settings_sent;

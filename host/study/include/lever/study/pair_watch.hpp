@@ -65,8 +65,6 @@ protocol::CommandMessage command_for(protocol::Direction d, const protocol::Sett
 // the counter moved on and the settings are the ones asked for.
 bool confirms(const protocol::SettingsMessage& seen, std::uint8_t changes_before,
               const protocol::SettingsMessage& wanted) noexcept;
-// The same settings (the counters aside): what an interval's settings frames must go on showing.
-bool same_settings(const protocol::SettingsMessage& a, const protocol::SettingsMessage& b) noexcept;
 // What a lever's settings frame showed, received at `at_us`, as an interval's `confirmed` holds it in the log.
 nlohmann::json settings_json(const protocol::SettingsMessage& s, std::int64_t at_us);
 // "p 5.00 %, floor 0.010, prefilter off, deadband": for the experimenter and the log, never the subject.
