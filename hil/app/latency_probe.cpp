@@ -157,10 +157,11 @@ void LatencyProbe::report(nlohmann::json& report) const {
     nlohmann::json j{
         {"n", s.latencies_ms.size()}, {"missed", s.missed}, {"unresolved", s.unresolved}, {"postponed", s.postponed}};
     if (s.latencies_ms.empty()) {
-      j["p50"] = j["p99"] = j["max"] = nullptr;
+      j["p25"] = j["p50"] = j["p99"] = j["max"] = nullptr;
     } else {
       std::vector<double> sorted = s.latencies_ms;
       std::sort(sorted.begin(), sorted.end());
+      j["p25"] = percentile(sorted, 0.25);
       j["p50"] = percentile(sorted, 0.50);
       j["p99"] = percentile(sorted, 0.99);
       j["max"] = sorted.back();

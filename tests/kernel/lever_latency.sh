@@ -34,15 +34,22 @@ report=$out/$name.report
 jq .latency "$report"
 r() { jq -r "$1" "$report"; }
 # The design bound, from the loops' timing and not from a measurement (docs/hil-serve.md, "Latency"). Both levers'
-# loops and serve's ticks fall on the same whole milliseconds, and the two levers run one after the other within a
-# millisecond in an order fixed for the run. A sample therefore waits less than one period for the lever that senses
-# it; that lever sends it in its step; the lever that acts on it takes it in its step of the same millisecond when
-# it runs second, of the next when it runs first (or when the frame's transport, two bridge hops, outlasts the
-# first's step), and writes the PWM within its step. Each direction: at most 2 periods plus the acting lever's step
-# (a step is at most timing.long_step_us; a longer one spends the timing budget). The sum of the two directions at
-# one site: one direction acts in the same millisecond, the other in the next, so 3 periods plus both steps; through
-# two bridges each direction waits for the next millisecond, so 4 periods plus both steps. A lever that acted a
-# whole period late in either direction fails the sum; one acting a period late where it should act at once, each.
+# loops and serve's ticks fall on the same whole milliseconds. A sample waits less than one period for the lever that
+# senses it; that lever sends it in its step; the lever that acts on it takes it in its step of the same millisecond
+# when it runs second, of the next when it runs first (or when the frame's transport, two bridge hops, outlasts the
+# first's step), and writes the PWM within its step. Every probe, each direction: at most 2 periods plus the acting
+# lever's step (a step is at most timing.long_step_us; a longer one spends the timing budget).
+# Which lever runs first in a millisecond is kept by the kernel (equal SCHED_FIFO priority on one CPU: the lever whose
+# timer was armed first wakes first) but not enforced by the firmware: anything that delays one lever's wake or step
+# can reverse it, for that millisecond or from then on. So the two directions' sum is bounded on their lower
+# quartiles, not on their maxima. In a millisecond with a given order one direction acts in the same millisecond and
+# the other in the next, 3 periods plus both steps between them at one site. The probes alternate between the
+# directions every 100 ms, so the share of motion probes that met one order and the share of force probes that met
+# the other add up to one, give or take a probe per change of order. Both lower quartiles on the slow side need over
+# three quarters of each direction's probes slow, half the probes more than any sequence of orders gives: a lever
+# acting a period late in most milliseconds, not a reordered few. Through two bridges each direction waits for the
+# next millisecond, so 4 periods plus both steps. A lever that acts a whole period late where it should act at once
+# fails the sum; one acting a period later than either, each direction's maximum.
 period_ms=1
 top_step_ms=$(awk -v us="$(key top timing long_step_us)" 'BEGIN { print us / 1000 }')
 hsi_step_ms=$(awk -v us="$(key hsi timing long_step_us)" 'BEGIN { print us / 1000 }')
@@ -60,12 +67,12 @@ for series in encoder_edge_to_top_pwm_ms gauge_reply_to_hsi_pwm_ms; do
   s=".latency.$series"
   check "$series: $(r "$s.n") probes answered (postponed $(r "$s.postponed")), none missed ($(r "$s.missed")) or unresolved ($(r "$s.unresolved"))" \
     jq_true "$report" "($s.n | num) >= 50 and ($s.missed | num) == 0 and ($s.unresolved | num) == 0"
-  check "$series: p50 $(r "$s.p50"), p99 $(r "$s.p99"), max $(r "$s.max") ms, within 2 periods and the acting lever's step: ${bound[$series]} ms" \
+  check "$series: p25 $(r "$s.p25"), p50 $(r "$s.p50"), p99 $(r "$s.p99"), max $(r "$s.max") ms, within 2 periods and the acting lever's step: ${bound[$series]} ms" \
     jq_true "$report" "($s.max | num) <= ${bound[$series]}"
 done
 e=.latency.encoder_edge_to_top_pwm_ms g=.latency.gauge_reply_to_hsi_pwm_ms
-check "the two directions' sum, $(r "(($e.max // 0) + ($g.max // 0)) * 1000 | round / 1000") ms at most, within $periods_in_sum periods and both steps: $sum_bound ms" \
-  jq_true "$report" "($e.max | num) + ($g.max | num) <= $sum_bound"
+check "the two directions' lower quartiles' sum, $(r "(($e.p25 // 0) + ($g.p25 // 0)) * 1000 | round / 1000") ms, within $periods_in_sum periods and both steps: $sum_bound ms" \
+  jq_true "$report" "($e.p25 | num) + ($g.p25 | num) <= $sum_bound"
 check "the world kept up with the levers (slips $(r .serve.slips), max lag $(r .serve.max_lag_ms) ms)" \
   jq_true "$report" '(.serve.slips | num) == 0'
 finish "lever-fw latency, $topology"
