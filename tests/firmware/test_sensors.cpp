@@ -150,6 +150,52 @@ TEST_CASE("the tracking loop follows a ramp with less noise than the backward di
   CHECK(loop_rms * 3 < diff_rms);
 }
 
+TEST_CASE("the rate of the tracking loop's angle estimate answers sooner and passes more quantization",
+          "[firmware][velocity]") {
+  const double count = 2.0 * std::numbers::pi / 16384.0;
+  constexpr double b = 300.0, h = 1e-3;
+  SECTION("one count at rest: the integrator moves by b^2 h counts, the rate by b^2 h + 2 b") {
+    VelocityEstimator integrator({VelocityMethod::tracking_loop, b}), rate({VelocityMethod::tracking_loop_rate, b});
+    integrator.update(0.0, h);
+    rate.update(0.0, h);
+    CHECK(integrator.update(count, h) == Approx(b * b * h * count));
+    CHECK(rate.update(count, h) == Approx((b * b * h + 2.0 * b) * count));
+  }
+  SECTION("a speed that steps from 0 to 1 rad/s: the rate is nearer it at every tick of the first 10 ms") {
+    VelocityEstimator integrator({VelocityMethod::tracking_loop, b}), rate({VelocityMethod::tracking_loop_rate, b});
+    integrator.update(0.0, h);
+    rate.update(0.0, h);
+    for (int k = 1; k <= 10; ++k) {
+      const double a = integrator.update(k * h, h), r = rate.update(k * h, h);
+      INFO("tick " << k << ": integrator " << a << ", rate " << r);
+      CHECK(std::fabs(r - 1.0) < std::fabs(a - 1.0));
+    }
+  }
+  SECTION(
+      "on a quantized ramp both settle on the speed; the rate is noisier than the integrator, less than the "
+      "difference") {
+    VelocityEstimator integrator({VelocityMethod::tracking_loop, b}), rate({VelocityMethod::tracking_loop_rate, b});
+    VelocityEstimator diff({VelocityMethod::backward_difference, 0.0});
+    const double speed = 0.7;
+    double sum = 0.0, integrator_sq = 0.0, rate_sq = 0.0, diff_sq = 0.0;
+    int n = 0;
+    for (int k = 0; k < 3000; ++k) {
+      const double angle = std::floor(speed * k * h / count) * count;
+      const double a = integrator.update(angle, h), r = rate.update(angle, h), d = diff.update(angle, h);
+      if (k > 500) {
+        sum += r;
+        integrator_sq += (a - speed) * (a - speed);
+        rate_sq += (r - speed) * (r - speed);
+        diff_sq += (d - speed) * (d - speed);
+        ++n;
+      }
+    }
+    CHECK(sum / n == Approx(speed).margin(0.01));
+    CHECK(std::sqrt(rate_sq / n) > 2.0 * std::sqrt(integrator_sq / n));
+    CHECK(std::sqrt(rate_sq / n) < std::sqrt(diff_sq / n));
+  }
+}
+
 TEST_CASE("the tracking loop is stable for every step it is given: late ticks make it lag, never blow up",
           "[firmware][velocity][timing]") {
   const double count = 2.0 * std::numbers::pi / 16384.0;
@@ -173,6 +219,24 @@ TEST_CASE("the tracking loop is stable for every step it is given: late ticks ma
     INFO("dt " << dt);
     CHECK(worst < 0.5 * 1.3);  // critically damped: a small overshoot, no growth
     CHECK(last == Approx(0.5).margin(0.05));
+  }
+  // The angle estimate's rate passes the quantization the integrator filters, so it is held to no growth: over the
+  // last 100 steps it swings no wider than over the first 100 after its rise, and its mean is the speed.
+  for (const double dt : {1e-3, 2e-3, 2.8e-3, 3e-3, 5e-3, 10e-3, 50e-3}) {
+    VelocityEstimator w({VelocityMethod::tracking_loop_rate, 300.0});
+    double a = 0.0, early = 0.0, late = 0.0, late_sum = 0.0;
+    for (int k = 0; k < 400; ++k) {
+      a += 0.5 * dt;
+      const double error = std::fabs(w.update(std::floor(a / count) * count, dt) - 0.5);
+      if (k >= 20 && k < 120) early = std::max(early, error);
+      if (k >= 300) {
+        late = std::max(late, error);
+        late_sum += w.state().rate;
+      }
+    }
+    INFO("dt " << dt);
+    CHECK(late <= early + 1e-9);  // the quantization repeats its pattern: equal swings are no growth
+    CHECK(late_sum / 100.0 == Approx(0.5).margin(0.05));
   }
 }
 

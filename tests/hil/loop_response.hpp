@@ -11,6 +11,8 @@
 #include <optional>
 #include <vector>
 
+#include "lever/fw/velocity_estimator.hpp"
+
 namespace lever::test {
 
 using Complex = std::complex<double>;
@@ -113,14 +115,29 @@ class SampledPlant {
   std::array<double, 3> bd_{};
 };
 
-// The firmware's tracking-loop velocity estimate over the angle (VelocityEstimator: one Euler step per tick,
-// v_k = v_{k-1} + b^2 h e_k, a_k = a_{k-1} + h (v_k + 2 b e_k), e_k = theta_k - a_{k-1}).
-inline Complex velocity_estimate(Complex z, double bandwidth_rad_s) {
-  const double h = kPeriod, b = bandwidth_rad_s;
+// The firmware's velocity estimate over the angle (VelocityEstimator: one Euler step per tick,
+// v_k = v_{k-1} + b^2 h e_k, a_k = a_{k-1} + h (v_k + 2 b e_k), e_k = theta_k - a_{k-1}); its output is the
+// integrator v (tracking_loop) or the angle estimate's rate v + 2 b e (tracking_loop_rate).
+inline Complex velocity_estimate(Complex z, const fw::VelocityEstimator::Config& config) {
+  const double h = kPeriod, b = config.bandwidth_rad_s;
   const Complex q = 1.0 - 1.0 / z;
+  if (config.method == fw::VelocityMethod::backward_difference) return q / h;
   const Complex g = b * b * h * h / (q * q) + 2.0 * b * h / q;  // a = g e
   const Complex e = 1.0 / (1.0 + g / z);                        // e = theta - a / z
-  return b * b * h / q * e;
+  const Complex integrator = b * b * h / q * e;
+  return config.method == fw::VelocityMethod::tracking_loop_rate ? integrator + 2.0 * b * e : integrator;
+}
+
+// The output's gain for white noise on the angle, sqrt((1/pi) integral over 0..pi of |H|^2): what a moving encoder's
+// quantization (uniform, white at 1 kHz) becomes in the estimate, per radian of its standard deviation.
+inline double white_noise_gain(const fw::VelocityEstimator::Config& config) {
+  constexpr int kSteps = 20000;
+  double sum = 0.0;
+  for (int i = 0; i < kSteps; ++i) {
+    const double w = std::numbers::pi * (i + 0.5) / kSteps;
+    sum += std::norm(velocity_estimate(std::polar(1.0, w), config));
+  }
+  return std::sqrt(sum / kSteps);
 }
 
 struct Margin {

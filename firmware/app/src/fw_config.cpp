@@ -53,8 +53,10 @@ void bind_encoder_and_velocity(program::ConfigSchema& s, fw::LeverConfig& l) {
             "illegal transitions tolerated before ENCODER latches");
   s.choice("velocity.method", l.velocity.method,
            {{"tracking_loop", fw::VelocityMethod::tracking_loop},
+            {"tracking_loop_rate", fw::VelocityMethod::tracking_loop_rate},
             {"backward_difference", fw::VelocityMethod::backward_difference}},
-           "velocity estimate");
+           "velocity estimate: the tracking loop's integrator, the rate of its angle estimate (less lag, more noise), "
+           "or the backward difference");
   // Whole rad/s below the 1 ms Euler step's stability limit, so the largest value accepted is a stable loop.
   s.number("velocity.bandwidth_rad_s", l.velocity.bandwidth_rad_s, 1.0,
            std::floor(fw::VelocityEstimator::kMaxStableBandwidthRadS), "rad/s",

@@ -1,14 +1,17 @@
 #pragma once
 // Lever speed from quantized position. The backward difference is the paper's noisy baseline (one encoder
 // count per ms is 0.38 rad/s); the tracking loop (a type-2 loop on angle) gives a smooth estimate whose
-// bandwidth is a parameter.
+// bandwidth is a parameter. Its integrator's state lags the angle's rate as a second-order low-pass; the rate of
+// its angle estimate (the integrator plus the proportional path on the error) lags less and passes more of the
+// encoder's quantization: a position loop's D that needs phase more than quiet takes that (docs/hil-model.md,
+// "The TOP's velocity estimate, derived again").
 #include <cstdint>
 
 #include "lever/fw/tick.hpp"
 
 namespace lever::fw {
 
-enum class VelocityMethod : std::uint8_t { backward_difference = 0, tracking_loop = 1 };
+enum class VelocityMethod : std::uint8_t { backward_difference = 0, tracking_loop = 1, tracking_loop_rate = 2 };
 
 class VelocityEstimator {
  public:
@@ -24,7 +27,8 @@ class VelocityEstimator {
   static constexpr double kMaxStableBandwidthRadS = kStableBandwidthTimesPeriod / kSecondsPerTick;
   struct State {
     double angle = 0.0;     // tracking loop's angle estimate
-    double velocity = 0.0;  // output
+    double velocity = 0.0;  // the tracking loop's integrator (the backward difference's output)
+    double rate = 0.0;      // the tracking loop's angle estimate's rate over its last step
     double previous = 0.0;  // backward difference's last angle
     bool primed = false;
   };
@@ -45,7 +49,7 @@ class VelocityEstimator {
   // backward difference over the gap, which bounds the work per call.
   double update(double measured_angle, double dt) noexcept {
     if (!state_.primed || !(dt > 0.0)) {
-      state_ = {measured_angle, 0.0, measured_angle, true};
+      state_ = {measured_angle, 0.0, 0.0, measured_angle, true};
       return 0.0;
     }
     const double previous = state_.previous;
@@ -56,20 +60,20 @@ class VelocityEstimator {
     }
     const double periods = dt * (1.0 / kSecondsPerTick);  // a constant: no division per tick
     if (periods > static_cast<double>(kMaxSubsteps)) {
-      state_.velocity = (measured_angle - previous) / dt;
+      state_.velocity = state_.rate = (measured_angle - previous) / dt;
       state_.angle = measured_angle;
       return state_.velocity;
     }
     if (periods <= 1.0 + 1e-9) {
       euler_step(measured_angle, dt);  // the nominal tick
-      return state_.velocity;
+      return output();
     }
     const int substeps = static_cast<int>(periods - 1e-9) + 1;
     const double h = dt / substeps;
     for (int i = 1; i < substeps; ++i)
       euler_step(previous + (measured_angle - previous) * (static_cast<double>(i) / substeps), h);
     euler_step(measured_angle, h);
-    return state_.velocity;
+    return output();
   }
 
  private:
@@ -80,7 +84,11 @@ class VelocityEstimator {
     const double b = config_.bandwidth_rad_s;
     const double error = target - state_.angle;
     state_.velocity += b * b * error * h;
-    state_.angle += (state_.velocity + 2.0 * b * error) * h;
+    state_.rate = state_.velocity + 2.0 * b * error;
+    state_.angle += state_.rate * h;
+  }
+  constexpr double output() const noexcept {
+    return config_.method == VelocityMethod::tracking_loop_rate ? state_.rate : state_.velocity;
   }
 
   Config config_;
