@@ -77,18 +77,6 @@ double hil_gauge_hold_s(const Loops& l) { return 0.5 / l.sim.gauge.output_rate_h
 // On a board the newest Modbus reading is half a poll old on average, plus the exchange (1.5 ms at 115200 baud).
 constexpr double kBoardGaugeHoldS = 0.5 * 5e-3 + 1.5e-3;
 
-const char* method_name(fw::VelocityMethod method) {
-  switch (method) {
-    case fw::VelocityMethod::tracking_loop:
-      return "tracking_loop";
-    case fw::VelocityMethod::tracking_loop_rate:
-      return "tracking_loop_rate";
-    case fw::VelocityMethod::backward_difference:
-      return "backward_difference";
-  }
-  return "?";
-}
-
 void print(const char* loop, const test::Margin& m) {
   std::printf("loop margins: %-44s crossover %6.2f Hz  phase margin %6.1f deg  %5.1f deg/ms  delay margin %5.2f ms\n",
               loop, m.crossover_hz, m.phase_margin_deg, m.degrees_per_ms(), m.delay_margin_ms());
@@ -211,7 +199,8 @@ TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][veloc
       const bool kept = std::all_of(margins.begin(), margins.end(),
                                     [&](const auto& m) { return m && m->delay_margin_ms() >= needed_ms; });
       const double gain = test::white_noise_gain(l.top.velocity);
-      std::printf("velocity derivation: %-18s %3.0f rad/s  delay margins (ms)", method_name(method), b);
+      std::printf("velocity derivation: %-18s %3.0f rad/s  delay margins (ms)", std::string(fw::name(method)).c_str(),
+                  b);
       for (const auto& m : margins) std::printf(" %5.2f", m ? m->delay_margin_ms() : -1.0);
       std::printf("  white-noise gain %6.0f%s\n", gain, kept ? "  kept" : "");
       if (kept && (!pick || gain < 0.99 * pick_gain)) {
@@ -221,8 +210,8 @@ TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][veloc
     }
   }
   REQUIRE(pick);
-  std::printf("velocity derivation: the pick is %s at %.0f rad/s (white-noise gain %.0f)\n", method_name(pick->method),
-              pick->bandwidth_rad_s, pick_gain);
+  std::printf("velocity derivation: the pick is %s at %.0f rad/s (white-noise gain %.0f)\n",
+              std::string(fw::name(pick->method)).c_str(), pick->bandwidth_rad_s, pick_gain);
 }
 
 TEST_CASE("a crossing with a phase lead is a wide margin, one with a lag past -180 degrees a negative one",

@@ -51,10 +51,7 @@ void bind_encoder_and_velocity(program::ConfigSchema& s, fw::LeverConfig& l) {
   s.integer("encoder.counter_bits", l.counter_bits, 8, 32, "bits", "width of a hardware counter");
   s.integer("encoder.illegal_threshold", l.decoder.illegal_threshold, 0, 1000000, "",
             "illegal transitions tolerated before ENCODER latches");
-  s.choice("velocity.method", l.velocity.method,
-           {{"tracking_loop", fw::VelocityMethod::tracking_loop},
-            {"tracking_loop_rate", fw::VelocityMethod::tracking_loop_rate},
-            {"backward_difference", fw::VelocityMethod::backward_difference}},
+  s.choice("velocity.method", l.velocity.method, program::choices_of(fw::kAllVelocityMethods),
            "velocity estimate: the tracking loop's integrator, the rate of its angle estimate (less lag, more noise), "
            "or the backward difference");
   // Whole rad/s below the 1 ms Euler step's stability limit, so the largest value accepted is a stable loop.

@@ -6,12 +6,29 @@
 // encoder's quantization: a position loop's D that needs phase more than quiet takes that (docs/hil-model.md,
 // "The TOP's velocity estimate, derived again").
 #include <cstdint>
+#include <string_view>
 
 #include "lever/fw/tick.hpp"
 
 namespace lever::fw {
 
 enum class VelocityMethod : std::uint8_t { backward_difference = 0, tracking_loop = 1, tracking_loop_rate = 2 };
+
+inline constexpr VelocityMethod kAllVelocityMethods[] = {
+    VelocityMethod::tracking_loop, VelocityMethod::tracking_loop_rate, VelocityMethod::backward_difference};
+
+// The one spelling of each method: lever-fw's configuration parses and prints it, tests print it.
+constexpr std::string_view name(VelocityMethod m) noexcept {
+  switch (m) {
+    case VelocityMethod::backward_difference:
+      return "backward_difference";
+    case VelocityMethod::tracking_loop:
+      return "tracking_loop";
+    case VelocityMethod::tracking_loop_rate:
+      return "tracking_loop_rate";
+  }
+  return "unknown";
+}
 
 class VelocityEstimator {
  public:
