@@ -24,7 +24,7 @@ constexpr double kTimingShareOfMargin = 0.5;
 struct Loops {
   hil::SimConfig sim = hil::SimConfig{};  // the HIL's plant, wall, operator and amplifier (docs/hil-model.md)
   // The firmware's gains as the boards run them (firmware/config/hsi.toml and top.toml, which the HIL's defaults
-  // follow: fw::role_defaults).
+  // follow).
   fw::LeverConfig top = sim.top_firmware;
   fw::LeverConfig hsi = sim.hsi_firmware;
 

@@ -46,8 +46,8 @@ r() { jq -r "$1" "$report"; }
 # the other in the next, 3 periods plus both steps between them at one site. The probes alternate between the
 # directions every 100 ms, so the share of motion probes that met one order and the share of force probes that met
 # the other add up to one, give or take a probe per change of order. Both lower quartiles on the slow side need over
-# three quarters of each direction's probes slow, half the probes more than any sequence of orders gives: a lever
-# acting a period late in most milliseconds, not a reordered few. Through two bridges each direction waits for the
+# three quarters of each direction's probes slow, which no sequence of orders gives: only a lever acting a period
+# late in most milliseconds, not a reordered few. Through two bridges each direction waits for the
 # next millisecond, so 4 periods plus both steps. A lever that acts a whole period late where it should act at once
 # fails the sum; one acting a period later than either, each direction's maximum.
 period_ms=1
