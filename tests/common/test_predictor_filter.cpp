@@ -99,4 +99,11 @@ TEST_CASE("config validation rejects what the rule cannot mean", "[codec]") {
   CHECK_FALSE(is_valid(Config<double>{Mode::deadband, 0.1, 0.0, -5.0}));
   CHECK_FALSE(is_valid(Config<double>{Mode::deadband, std::nan(""), 0.0, 0.0}));
   CHECK_FALSE(is_valid(Config<double>{static_cast<Mode>(7), 0.1, 0.0, 0.0}));
+  // What a loop at 1 kHz runs: a Weber fraction below 1, a cut-off below 500 Hz; and nothing is_valid refuses.
+  CHECK(runs_at(Config<double>{Mode::deadband, 0.9999, 0.0, 499.9}, 1000.0));
+  CHECK_FALSE(runs_at(Config<double>{Mode::deadband, 1.0, 0.0, 0.0}, 1000.0));
+  CHECK_FALSE(runs_at(Config<double>{Mode::deadband, 0.1, 0.0, 500.0}, 1000.0));
+  CHECK(runs_at(Config<double>{Mode::deadband, 0.1, 0.0, 500.0}, 2000.0));
+  CHECK_FALSE(runs_at(Config<double>{Mode::deadband, -0.1, 0.0, 0.0}, 1000.0));
+  CHECK_FALSE(runs_at(Config<float>{Mode::deadband, 0.1f, 0.0f, std::nanf("")}, 1000.0));
 }

@@ -188,3 +188,27 @@ TEST_CASE("the settings frame's counters wrap at 64 on the wire", "[firmware][se
   }
   CHECK(last->changes == 1);  // 65 modulo 64
 }
+
+// The levers hold a raw frame to what the programs' options refuse (codec::runs_at at 1 kHz): a Weber fraction below
+// 1 and a prefilter cut-off below 500 Hz. A frame can carry p up to 6.5535 and 6553.5 Hz; past the bound it is
+// counted as rejected and changes nothing, within it it is taken.
+TEST_CASE("set_deadband past a Weber fraction of 1 or a cut-off of 500 Hz is refused, within them taken",
+          "[firmware][settings]") {
+  struct Case {
+    std::uint16_t p, filter_hz;
+    bool taken;
+  };
+  for (const Case c : {Case{10000, 0, false}, Case{65535, 0, false}, Case{9999, 0, true}, Case{1000, 5000, false},
+                       Case{1000, 65535, false}, Case{1000, 4999, true}}) {
+    INFO("p " << c.p << " x 1e-4, cut-off " << c.filter_hz << " x 0.1 Hz");
+    PairRig rig;
+    run_logged(rig, 10);
+    const auto rejected = rig.top.counters().commands_rejected;
+    rig.bus.inject(
+        protocol::pack(set_deadband(protocol::Direction::force, codec::Mode::deadband, c.p, 50, c.filter_hz), 0));
+    const auto top = settings_of(run_logged(rig, 1), Role::top);
+    CHECK(top.size() == (c.taken ? 1u : 0u));
+    CHECK(rig.top.counters().commands_rejected == rejected + (c.taken ? 0u : 1u));
+    if (c.taken && !top.empty()) CHECK((top.front().second.p == c.p && top.front().second.filter_hz == c.filter_hz));
+  }
+}

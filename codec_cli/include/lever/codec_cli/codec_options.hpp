@@ -66,6 +66,10 @@ struct Limits {
   // The help names the steps each value is rounded to in a CAN command frame (lever-ctl sends them).
   bool wire_steps = false;
 };
+// A Weber fraction's options refuse what a lever refuses (codec::runs_at): an option never sends a command the
+// lever drops.
+static_assert(program::kWeberFraction.hi == codec::kWeberFractionLimit && program::kWeberFraction.hi_open);
+
 // What a CAN command frame carries (the floor: protocol::kFloorLsb in 16 bits) and the 1 kHz loop can filter.
 inline constexpr Limits kOnWire{.floor_max = protocol::kFloorLsb * std::numeric_limits<std::uint16_t>::max()};
 // The same, for a program that rounds the values to the frame's steps itself.

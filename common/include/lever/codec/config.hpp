@@ -39,4 +39,15 @@ constexpr bool is_valid(const Config<T>& c) noexcept {
          std::isfinite(c.floor) && c.floor >= T(0) && std::isfinite(c.filter_hz) && c.filter_hz >= T(0);
 }
 
+// A Weber fraction is below 1: at 1 no change short of a reversal of sign is ever noticeable.
+inline constexpr double kWeberFractionLimit = 1.0;
+
+// What a codec sampled at `rate_hz` runs as its settings say: valid, a Weber fraction below the limit, and a prefilter
+// cut-off below the Nyquist frequency. The levers hold every setting they take, from a file or a raw CAN frame, to
+// it, and the programs' options (codec_cli) refuse the same.
+template <typename T>
+constexpr bool runs_at(const Config<T>& c, double rate_hz) noexcept {
+  return is_valid(c) && c.p < T(kWeberFractionLimit) && c.filter_hz < T(0.5 * rate_hz);
+}
+
 }  // namespace lever::codec

@@ -289,7 +289,7 @@ class Lever {
         const codec::Config<double> c = protocol::codec_settings(m);
         // Only the sending end of a direction owns its parameters; the receiving end follows the mode flag
         // carried by the data frames, which switches it at the same sample.
-        accepted = codec::is_valid(c) && m.direction == Role::kSends;
+        accepted = codec::runs_at(c, 1.0 / kSecondsPerTick) && m.direction == Role::kSends;
         if (accepted) {
           role_.reconfigure(c);
           ++settings_changes_;  // a copy with the same values counts too: the host sees its command arrive

@@ -88,8 +88,9 @@ struct LeverConfig {
 constexpr bool is_valid(const LeverConfig& c) noexcept {
   const auto& h = c.homing;
   return c.pair < protocol::kPairCount && c.heartbeat_period > 0 && c.comms_timeout > 0 && c.refresh_period > 0 &&
-         codec::is_valid(c.motion_codec) && codec::is_valid(c.force_codec) && c.counts_per_rev > 0 &&
-         c.counter_bits >= 8 && c.counter_bits <= 32 && c.torque_limit_nm > 0 && c.safe_hold_torque_nm >= 0 &&
+         codec::runs_at(c.motion_codec, 1.0 / kSecondsPerTick) &&
+         codec::runs_at(c.force_codec, 1.0 / kSecondsPerTick) && c.counts_per_rev > 0 && c.counter_bits >= 8 &&
+         c.counter_bits <= 32 && c.torque_limit_nm > 0 && c.safe_hold_torque_nm >= 0 &&
          c.safe_hold_torque_nm <= c.torque_limit_nm && c.position_min_rad < c.position_max_rad &&
          c.gauge.stale_after > 0 && c.gauge.tare_samples > 0 && c.timing.overrun_periods >= 1.0 &&
          c.timing.fault_after >= 1 && c.timing.window >= 1 && c.timing.window <= StepTiming::kMaxWindow &&
