@@ -29,6 +29,10 @@ struct Loops {
   // follow).
   fw::LeverConfig top = sim.top_firmware;
   fw::LeverConfig hsi = sim.hsi_firmware;
+  // What the HSI sends as its velocity: in the HIL the paper's chain (SimConfig's default), on a board its
+  // configuration's (firmware/config/hsi.toml, LeverConfig's default).
+  fw::MotionVelocity hil_sent = sim.hsi_firmware.motion_velocity;
+  fw::MotionVelocity board_sent = fw::LeverConfig{}.motion_velocity;
 
   test::LeverMechanics top_free(bool moving) const {
     const auto& p = sim.top_plant;
@@ -53,18 +57,20 @@ struct Loops {
   }
 
   // The HSI in contact, broken at its torque: its own contact damping, and the teleoperation loop (its angle
-  // to the TOP over the link, the TOP's closed position loop pressing the wall, the wall's force through the
-  // amplifier and back over the link, displayed). `gauge_delay_s`: the amplifier's output hold and, on a
-  // board, the Modbus poll.
+  // and the velocity it sends to the TOP over the link, the TOP's closed position loop pressing the wall, the
+  // wall's force through the amplifier and back over the link, displayed). `gauge_delay_s`: the amplifier's output
+  // hold and, on a board, the Modbus poll. `sent`: what the HSI sends as its velocity (the HIL's paper chain the
+  // quantized angle's backward difference, a board its estimate).
   Complex hsi_loop(const test::SampledPlant& hsi_plant, const test::SampledPlant& top_plant, int link_ticks,
-                   double gauge_delay_s, double w) const {
+                   double gauge_delay_s, fw::MotionVelocity sent, double w) const {
     const Complex z = std::polar(1.0, w * kPeriod);
     const Complex s{0.0, w};
     const Complex v_top = test::velocity_estimate(z, top.velocity);
     const Complex v_hsi = test::velocity_estimate(z, hsi.velocity);
+    const Complex v_sent = sent == fw::MotionVelocity::difference ? (1.0 - 1.0 / z) / kPeriod : v_hsi;
     const auto& c = top.position;
     const Complex pt = top_plant.at(z);
-    const Complex tracking = pt * (c.kp + (c.kd + c.kff_velocity) * v_top) / (1.0 + pt * (c.kp + c.kd * v_top));
+    const Complex tracking = pt * (c.kp + (c.kd + c.kff_velocity) * v_sent) / (1.0 + pt * (c.kp + c.kd * v_top));
     const double pole = 2.0 * std::numbers::pi * sim.gauge.pole_hz();
     const Complex amplifier = std::exp(-s * gauge_delay_s) / ((1.0 + s / pole) * (1.0 + s / pole));
     const Complex wall_torque = sim.wall.stiffness + sim.wall.damping * s;
@@ -119,6 +125,9 @@ double top_growth_with_delay(const Loops& l, double delay_s) {
 TEST_CASE("the loops' crossovers and phase margins, and the timing budget of firmware/core derived from them",
           "[hil][timing][margins]") {
   const Loops l;
+  // The adaptive window is not linear; neither end sends it by default.
+  REQUIRE(l.hil_sent != fw::MotionVelocity::adaptive_window);
+  REQUIRE(l.board_sent != fw::MotionVelocity::adaptive_window);
   const test::SampledPlant top_free_moving(l.top_free(true)), top_free_rest(l.top_free(false));
   const test::SampledPlant top_wall(l.top_at_wall()), hsi(l.hsi_in_hand());
   const int link = hil::nominal_one_way_delay_ticks(l.sim);
@@ -129,9 +138,9 @@ TEST_CASE("the loops' crossovers and phase margins, and the timing budget of fir
   const auto free_rest = test::smallest_margin([&](double w) { return l.top_loop(top_free_rest, w); });
   const auto wall = test::smallest_margin([&](double w) { return l.top_loop(top_wall, w); });
   const auto contact =
-      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, hil_gauge_hold, w); });
-  const auto contact_board =
-      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, board_gauge_hold, w); });
+      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, hil_gauge_hold, l.hil_sent, w); });
+  const auto contact_board = test::smallest_margin(
+      [&](double w) { return l.hsi_loop(hsi, top_wall, link, board_gauge_hold, l.board_sent, w); });
   REQUIRE(free_moving);
   REQUIRE(free_rest);
   REQUIRE(wall);
@@ -192,12 +201,15 @@ TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][veloc
       const test::SampledPlant moving(l.top_free(true)), rest(l.top_free(false)), wall(l.top_at_wall());
       const test::SampledPlant hsi(l.hsi_in_hand());
       const int link = hil::nominal_one_way_delay_ticks(l.sim);
-      const std::array margins{
-          test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
-          test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
-          test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
-          test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), w); }),
-          test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, w); })};
+      const std::array margins{test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
+                               test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
+                               test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
+                               test::smallest_margin([&](double w) {
+                                 return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), l.hil_sent, w);
+                               }),
+                               test::smallest_margin([&](double w) {
+                                 return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w);
+                               })};
       const bool kept = std::all_of(margins.begin(), margins.end(),
                                     [&](const auto& m) { return m && m->delay_margin_ms() >= needed_ms; });
       const double gain = test::white_noise_gain(l.top.velocity);
@@ -246,12 +258,15 @@ TEST_CASE("the TOP's damping gain and velocity estimate by their documented deri
         const test::SampledPlant moving(l.top_free(true)), rest(l.top_free(false)), wall(l.top_at_wall());
         const test::SampledPlant hsi(l.hsi_in_hand());
         const int link = hil::nominal_one_way_delay_ticks(l.sim);
-        const std::array margins{
-            test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
-            test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
-            test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
-            test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), w); }),
-            test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, w); })};
+        const std::array margins{test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
+                                 test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
+                                 test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
+                                 test::smallest_margin([&](double w) {
+                                   return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), l.hil_sent, w);
+                                 }),
+                                 test::smallest_margin([&](double w) {
+                                   return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w);
+                                 })};
         // A loop whose gain never reaches 1 has no crossover for a delay to shift: any delay leaves it stable.
         const bool timely = std::all_of(margins.begin(), margins.end(),
                                         [&](const auto& m) { return !m || m->delay_margin_ms() >= needed_ms; });
