@@ -85,6 +85,21 @@ double hil_gauge_hold_s(const Loops& l) { return 0.5 / l.sim.gauge.output_rate_h
 // On a board the newest Modbus reading is half a poll old on average, plus the exchange (1.5 ms at 115200 baud).
 constexpr double kBoardGaugeHoldS = 0.5 * 5e-3 + 1.5e-3;
 
+// The smallest margin of each loop the timing budget covers, in the table's order (docs/firmware.md): the TOP in free
+// motion moving and at rest, the TOP at the wall, the HSI in contact on the HIL's amplifier and on a board's Modbus
+// poll; none for a loop whose gain never reaches 1.
+std::array<std::optional<test::Margin>, 5> loop_margins(const Loops& l) {
+  const test::SampledPlant moving(l.top_free(true)), rest(l.top_free(false)), wall(l.top_at_wall());
+  const test::SampledPlant hsi(l.hsi_in_hand());
+  const int link = hil::nominal_one_way_delay_ticks(l.sim);
+  return {
+      test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
+      test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
+      test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
+      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), l.hil_sent, w); }),
+      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w); })};
+}
+
 void print(const char* loop, const test::Margin& m) {
   std::printf("loop margins: %-44s crossover %6.2f Hz  phase margin %6.1f deg  %5.1f deg/ms  delay margin %5.2f ms\n",
               loop, m.crossover_hz, m.phase_margin_deg, m.degrees_per_ms(), m.delay_margin_ms());
@@ -128,19 +143,7 @@ TEST_CASE("the loops' crossovers and phase margins, and the timing budget of fir
   // The adaptive window is not linear; neither end sends it by default.
   REQUIRE(l.hil_sent != fw::MotionVelocity::adaptive_window);
   REQUIRE(l.board_sent != fw::MotionVelocity::adaptive_window);
-  const test::SampledPlant top_free_moving(l.top_free(true)), top_free_rest(l.top_free(false));
-  const test::SampledPlant top_wall(l.top_at_wall()), hsi(l.hsi_in_hand());
-  const int link = hil::nominal_one_way_delay_ticks(l.sim);
-  const double hil_gauge_hold = hil_gauge_hold_s(l);
-  const double board_gauge_hold = kBoardGaugeHoldS;
-
-  const auto free_moving = test::smallest_margin([&](double w) { return l.top_loop(top_free_moving, w); });
-  const auto free_rest = test::smallest_margin([&](double w) { return l.top_loop(top_free_rest, w); });
-  const auto wall = test::smallest_margin([&](double w) { return l.top_loop(top_wall, w); });
-  const auto contact =
-      test::smallest_margin([&](double w) { return l.hsi_loop(hsi, top_wall, link, hil_gauge_hold, l.hil_sent, w); });
-  const auto contact_board = test::smallest_margin(
-      [&](double w) { return l.hsi_loop(hsi, top_wall, link, board_gauge_hold, l.board_sent, w); });
+  const auto [free_moving, free_rest, wall, contact, contact_board] = loop_margins(l);
   REQUIRE(free_moving);
   REQUIRE(free_rest);
   REQUIRE(wall);
@@ -198,18 +201,7 @@ TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][veloc
     for (double b = 100.0; b <= 825.0; b += 25.0) {
       Loops l;
       l.top.velocity = {method, b};
-      const test::SampledPlant moving(l.top_free(true)), rest(l.top_free(false)), wall(l.top_at_wall());
-      const test::SampledPlant hsi(l.hsi_in_hand());
-      const int link = hil::nominal_one_way_delay_ticks(l.sim);
-      const std::array margins{test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
-                               test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
-                               test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
-                               test::smallest_margin([&](double w) {
-                                 return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), l.hil_sent, w);
-                               }),
-                               test::smallest_margin([&](double w) {
-                                 return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w);
-                               })};
+      const auto margins = loop_margins(l);
       const bool kept = std::all_of(margins.begin(), margins.end(),
                                     [&](const auto& m) { return m && m->delay_margin_ms() >= needed_ms; });
       const double gain = test::white_noise_gain(l.top.velocity);
@@ -255,18 +247,8 @@ TEST_CASE("the TOP's damping gain and velocity estimate by their documented deri
         const double noise = kd * gain;
         if (noise > std::sqrt(3.0) * l.top.position.kp) continue;
         ++quiet;
-        const test::SampledPlant moving(l.top_free(true)), rest(l.top_free(false)), wall(l.top_at_wall());
-        const test::SampledPlant hsi(l.hsi_in_hand());
-        const int link = hil::nominal_one_way_delay_ticks(l.sim);
-        const std::array margins{test::smallest_margin([&](double w) { return l.top_loop(moving, w); }),
-                                 test::smallest_margin([&](double w) { return l.top_loop(rest, w); }),
-                                 test::smallest_margin([&](double w) { return l.top_loop(wall, w); }),
-                                 test::smallest_margin([&](double w) {
-                                   return l.hsi_loop(hsi, wall, link, hil_gauge_hold_s(l), l.hil_sent, w);
-                                 }),
-                                 test::smallest_margin([&](double w) {
-                                   return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w);
-                                 })};
+        const auto margins = loop_margins(l);
+        const test::SampledPlant wall(l.top_at_wall());
         // A loop whose gain never reaches 1 has no crossover for a delay to shift: any delay leaves it stable.
         const bool timely = std::all_of(margins.begin(), margins.end(),
                                         [&](const auto& m) { return !m || m->delay_margin_ms() >= needed_ms; });
