@@ -39,7 +39,8 @@ constexpr bool is_valid(const Config<T>& c) noexcept {
          std::isfinite(c.floor) && c.floor >= T(0) && std::isfinite(c.filter_hz) && c.filter_hz >= T(0);
 }
 
-// A Weber fraction is below 1: at 1 no change short of a reversal of sign is ever noticeable.
+// A Weber fraction is below 1: at 1 a fall to zero, the lever stopping, is never noticeable (|v_ref - 0| > p |v_ref|
+// never holds).
 inline constexpr double kWeberFractionLimit = 1.0;
 
 // What a codec sampled at `rate_hz` runs as its settings say: valid, a Weber fraction below the limit, and a prefilter

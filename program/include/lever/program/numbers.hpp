@@ -42,7 +42,7 @@ CLI::Validator whole(std::uint64_t lo, std::uint64_t hi, std::string_view what =
 CLI::Validator seed();
 
 // Shared ranges with physical meaning, so every program states them alike.
-// A Weber fraction: the smallest perceivable relative change; 1 would mean no change is ever perceived.
+// A Weber fraction: the smallest perceivable relative change; at 1 a fall to zero would never be perceived.
 inline constexpr Bounds kWeberFraction{0.0, 1.0, false, true, "a fraction"};
 // A prefilter cut-off at the 1 kHz control rate: 0 switches it off, Nyquist (500 Hz) and above aliases.
 inline constexpr Bounds kCutoffAt1kHz{0.0, 500.0, false, true, "a cut-off in Hz below Nyquist (500 Hz at 1 kHz)"};
