@@ -100,6 +100,12 @@ std::array<std::optional<test::Margin>, 5> loop_margins(const Loops& l) {
       test::smallest_margin([&](double w) { return l.hsi_loop(hsi, wall, link, kBoardGaugeHoldS, l.board_sent, w); })};
 }
 
+// The delay margin a loop needs for the timing budget: one lost period and a long step within its share.
+double budget_delay_margin_ms() {
+  const fw::StepTiming::Config timing{};
+  return (kPeriod * 1e3 + static_cast<double>(timing.long_step_us) * 1e-3) / kTimingShareOfMargin;
+}
+
 void print(const char* loop, const test::Margin& m) {
   std::printf("loop margins: %-44s crossover %6.2f Hz  phase margin %6.1f deg  %5.1f deg/ms  delay margin %5.2f ms\n",
               loop, m.crossover_hz, m.phase_margin_deg, m.degrees_per_ms(), m.delay_margin_ms());
@@ -193,8 +199,7 @@ TEST_CASE("the loops' crossovers and phase margins, and the timing budget of fir
 // the integrator, then to the smaller bandwidth. Its pick failed the contact check and is not applied; hidden, a tool
 // that prints every candidate and the pick (lever_tests_hil "[velocity-derivation]").
 TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][velocity-derivation]") {
-  const fw::StepTiming::Config timing{};
-  const double needed_ms = (kPeriod * 1e3 + static_cast<double>(timing.long_step_us) * 1e-3) / kTimingShareOfMargin;
+  const double needed_ms = budget_delay_margin_ms();
   std::optional<fw::VelocityEstimator::Config> pick;
   double pick_gain = 0.0;
   for (const auto method : {fw::VelocityMethod::tracking_loop, fw::VelocityMethod::tracking_loop_rate}) {
@@ -227,8 +232,7 @@ TEST_CASE("the TOP's velocity estimate by its documented derivation", "[.][veloc
 // tie within 1 % going to the lower noise. Hidden, a tool that prints every candidate within the noise bound and the
 // pick (lever_tests_hil "[damping-derivation]").
 TEST_CASE("the TOP's damping gain and velocity estimate by their documented derivation", "[.][damping-derivation]") {
-  const fw::StepTiming::Config timing{};
-  const double needed_ms = (kPeriod * 1e3 + static_cast<double>(timing.long_step_us) * 1e-3) / kTimingShareOfMargin;
+  const double needed_ms = budget_delay_margin_ms();
   struct Pick {
     fw::VelocityEstimator::Config velocity;
     double kd = 0.0, noise = 0.0, peak = 0.0;
