@@ -24,6 +24,7 @@ refuses "scripts/sysroot with two architectures" "got 2 arguments" "$root/script
 refuses "scripts/man-pages without its directories" "BIN_DIR and OUT_DIR" "$root/scripts/man-pages"
 refuses "scripts/check-skips without a file" "JUNIT_XML" "$root/scripts/check-skips"
 refuses "scripts/failed-tests without a file" "JUNIT_XML" "$root/scripts/failed-tests"
+refuses "scripts/slowest-tests with a count that is no number" "many" "$root/scripts/slowest-tests" x.xml many
 refuses "hil/experiments/gauge-sensitivity --seeds two" "'two'" "$root/hil/experiments/gauge-sensitivity" --seeds two
 refuses "scripts/package with an unknown architecture" "'riscv64'" "$root/scripts/package" riscv64
 refuses "scripts/package with a fourth argument" "'extra'" "$root/scripts/package" amd64 b d extra
