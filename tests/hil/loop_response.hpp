@@ -130,14 +130,19 @@ inline Complex velocity_estimate(Complex z, const fw::VelocityEstimator::Config&
 
 // The output's gain for white noise on the angle, sqrt((1/pi) integral over 0..pi of |H|^2): what a moving encoder's
 // quantization (uniform, white at 1 kHz) becomes in the estimate, per radian of its standard deviation.
-inline double white_noise_gain(const fw::VelocityEstimator::Config& config) {
+// `response` maps z to the output over the angle.
+template <typename Response>
+double white_noise_gain(const Response& response) {
   constexpr int kSteps = 20000;
   double sum = 0.0;
   for (int i = 0; i < kSteps; ++i) {
     const double w = std::numbers::pi * (i + 0.5) / kSteps;
-    sum += std::norm(velocity_estimate(std::polar(1.0, w), config));
+    sum += std::norm(response(std::polar(1.0, w)));
   }
   return std::sqrt(sum / kSteps);
+}
+inline double white_noise_gain(const fw::VelocityEstimator::Config& config) {
+  return white_noise_gain([&](Complex z) { return velocity_estimate(z, config); });
 }
 
 struct Margin {
