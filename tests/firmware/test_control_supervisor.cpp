@@ -1,6 +1,7 @@
 // Control laws and the safety state machine.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <numbers>
 
 #include "lever/fw/controllers.hpp"
 #include "lever/fw/supervisor.hpp"
@@ -9,9 +10,37 @@ using namespace lever::fw;
 
 TEST_CASE("PD with velocity feed-forward", "[firmware][control]") {
   PositionController c({10.0, 0.5, 0.02});
-  CHECK(c.update(0.1, 2.0, 0.0, 1.0) == Approx(10.0 * 0.1 + 0.5 * 1.0 + 0.02 * 2.0));
+  CHECK(c.update(0.1, 2.0, 0.0, 1.0, 1e-3) == Approx(10.0 * 0.1 + 0.5 * 1.0 + 0.02 * 2.0));
   CHECK(c.state().position_error == Approx(0.1));
   CHECK(c.state().velocity_error == Approx(1.0));
+}
+
+TEST_CASE("the reference's velocity reaches the D and the feed-forward through its low-pass", "[firmware][control]") {
+  PositionController::Config config{10.0, 0.5, 0.02};
+  config.reference_velocity_cutoff_hz = 12.5;
+  PositionController c(config);
+  const double alpha = 1.0 - std::exp(-2.0 * std::numbers::pi * 12.5 * 1e-3);
+  // The first reference passes whole; a step after it moves the filtered one by alpha a tick.
+  c.update(0.0, 1.0, 0.0, 0.0, 1e-3);
+  CHECK(c.state().velocity_ref == 1.0);
+  const double torque = c.update(0.0, 3.0, 0.0, 0.0, 1e-3);
+  const double filtered = 1.0 + alpha * 2.0;
+  CHECK(c.state().velocity_ref == Approx(filtered).epsilon(1e-12));
+  CHECK(torque == Approx((0.5 + 0.02) * filtered).epsilon(1e-12));
+  // One count of the HSI's angle in one tick (0.38 rad/s) kicks the TOP by alpha of what it did unfiltered.
+  PositionController kicked(config);
+  kicked.update(0.0, 0.0, 0.0, 0.0, 1e-3);
+  const double count_rad_s = 2.0 * std::numbers::pi / 16384 / 1e-3;
+  CHECK(kicked.update(0.0, count_rad_s, 0.0, 0.0, 1e-3) == Approx(alpha * 0.52 * count_rad_s).epsilon(1e-12));
+  // After a reset the next reference passes whole again.
+  c.reset();
+  c.update(0.0, -2.0, 0.0, 0.0, 1e-3);
+  CHECK(c.state().velocity_ref == -2.0);
+  // A cut-off of 0: as received.
+  config.reference_velocity_cutoff_hz = 0.0;
+  PositionController raw(config);
+  raw.update(0.0, 1.0, 0.0, 0.0, 1e-3);
+  CHECK(raw.update(0.0, 3.0, 0.0, 0.0, 1e-3) == Approx(0.52 * 3.0));
 }
 
 TEST_CASE("clamp_torque bounds every value, NaN included", "[firmware][control]") {

@@ -39,7 +39,7 @@ struct Loops {
   struct ReferencePath {
     double cutoff_hz = 0.0;
     bool feedforward_only = false;
-  } reference;
+  } reference{top.position.reference_velocity_cutoff_hz, false};
 
   test::LeverMechanics top_free(bool moving) const {
     const auto& p = sim.top_plant;

@@ -106,6 +106,8 @@ void bind_control(program::ConfigSchema& s, fw::LeverConfig& l) {
   s.number("control.position.kp_nm_per_rad", l.position.kp, 0.0, 1000.0, "N m/rad", "TOP position gain");
   s.number("control.position.kd_nms", l.position.kd, 0.0, 100.0, "N m s/rad", "TOP velocity gain");
   s.number("control.position.kff_nms", l.position.kff_velocity, 0.0, 100.0, "N m s/rad", "velocity feed-forward");
+  s.number("control.position.reference_velocity_cutoff_hz", l.position.reference_velocity_cutoff_hz, 0.0, 499.0, "Hz",
+           "the HSI's velocity reaches the D and the feed-forward through a low-pass at this cut-off (0: none)");
   s.number("control.position.approach_speed_rad_s", l.position.approach_speed_rad_s, 1e-3, 100.0, "rad/s",
            "after arming, the TOP walks to the HSI at most this fast");
   s.number("control.display.lever_arm_m", l.display.lever_arm_m, 1e-3, 10.0, "m", "pivot to handle");

@@ -1,6 +1,9 @@
 #pragma once
 // Control laws, each as Config (data, set once) + State (inspectable by logs and the HIL).
 #include <cmath>
+#include <numbers>
+
+#include "lever/math/elementary.hpp"
 
 namespace lever::fw {
 
@@ -19,6 +22,11 @@ class PositionController {
     double kp = 40.0;            // N m / rad
     double kd = 0.6;             // N m s / rad
     double kff_velocity = 0.02;  // N m s / rad: cancels the lever's viscous friction
+    // The reference's velocity reaches the D and the feed-forward through a first-order low-pass at this cut-off
+    // (0: as received). The HSI's velocity is a quantized angle's difference or estimate; through k_d + k_ff its
+    // one-count steps kick a pressing TOP off the wall (docs/hil-model.md, "The TOP's use of the reference's
+    // velocity, derived").
+    double reference_velocity_cutoff_hz = 0.0;
     // After arming, the TOP moves from where it is to where the HSI is at this speed at most, instead of
     // jumping there at full torque (after a reboot and homing the two can be a radian apart).
     double approach_speed_rad_s = 1.0;
@@ -26,7 +34,8 @@ class PositionController {
   struct State {
     double position_error = 0.0;
     double velocity_error = 0.0;
-    double torque = 0.0;  // before the supervisor's limit
+    double velocity_ref = 0.0;  // the reference's velocity after the low-pass
+    double torque = 0.0;        // before the supervisor's limit
   };
 
   constexpr PositionController() noexcept : PositionController(Config{}) {}
@@ -34,17 +43,36 @@ class PositionController {
   constexpr const Config& config() const noexcept { return config_; }
   constexpr const State& state() const noexcept { return state_; }
 
-  constexpr double update(double position_ref, double velocity_ref, double position, double velocity) noexcept {
+  // The low-pass starts again from the next reference's velocity (on arming: the reference's history is gone).
+  constexpr void reset() noexcept { primed_ = false; }
+
+  // One tick of `dt` seconds.
+  double update(double position_ref, double velocity_ref, double position, double velocity, double dt) noexcept {
+    if (!primed_ || !(config_.reference_velocity_cutoff_hz > 0.0)) {
+      primed_ = true;
+      state_.velocity_ref = velocity_ref;
+    } else {
+      // exp() at every change of dt only: a fixed tick reuses alpha, with the same result as computing it anew.
+      // lever::math's exp: the core's results do not depend on the board's libm.
+      if (!(dt == alpha_dt_)) {
+        alpha_dt_ = dt;
+        alpha_ = 1.0 - math::exp(-2.0 * std::numbers::pi * config_.reference_velocity_cutoff_hz * dt);
+      }
+      state_.velocity_ref += alpha_ * (velocity_ref - state_.velocity_ref);
+    }
     state_.position_error = position_ref - position;
-    state_.velocity_error = velocity_ref - velocity;
-    state_.torque =
-        config_.kp * state_.position_error + config_.kd * state_.velocity_error + config_.kff_velocity * velocity_ref;
+    state_.velocity_error = state_.velocity_ref - velocity;
+    state_.torque = config_.kp * state_.position_error + config_.kd * state_.velocity_error +
+                    config_.kff_velocity * state_.velocity_ref;
     return state_.torque;
   }
 
  private:
   Config config_;
   State state_;
+  bool primed_ = false;
+  double alpha_dt_ = -1.0;
+  double alpha_ = 1.0;
 };
 
 // HSI: display the remote contact force on the operator's hand. Open loop by default (torque = force x arm);

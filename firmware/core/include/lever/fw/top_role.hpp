@@ -72,6 +72,7 @@ class TopRole {
     tracked_ref_ = t.position_rad;
     have_motion_ = false;
     approaching_ = true;
+    controller_.reset();
     passivity_.on_armed();
   }
 
@@ -134,7 +135,7 @@ class TopRole {
     t.dissipated_energy_j = passivity_.state().dissipated_j;
     t.observed_energy_j = passivity_.state().observed_j;
     t.position_ref_rad = tracked_ref_;
-    return controller_.update(tracked_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s);
+    return controller_.update(tracked_ref_, t.velocity_ref_rad_s, t.position_rad, t.velocity_rad_s, dt);
   }
 
   std::optional<OutgoingData> transmit(Tick now, const LeverTelemetry& t, std::uint8_t pair) noexcept {
