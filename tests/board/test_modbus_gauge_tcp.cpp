@@ -157,6 +157,9 @@ TEST_CASE("TCP: a server that goes away and comes back on the same port is recon
   hold_int32(*server, 200);
   REQUIRE(eventually([&] { return gauge.latest()->raw == 200; }));
   const auto counters = gauge.counters();
+  INFO("errors " << counters.errors << ", timeouts " << counters.timeouts << ", connect failures "
+                 << counters.connect_failures << ", polls " << counters.polls << ", last errno "
+                 << counters.last_errno);
   CHECK(counters.reconnects == 1);
   CHECK(counters.connected);
   CHECK(gauge.latest()->sequence > frozen.sequence);
