@@ -242,15 +242,21 @@ rehome() {
 motor_on() { ! no_torque "$1"; }
 driver_on() { ! enable_low "$1"; }
 # until_on SECONDS ROLE...: polls every 0.2 ms until each lever named drives torque (motor_on) at the same moment,
-# for up to SECONDS: the HSI shows no force in free space, so only while the operator presses the wall
+# for up to SECONDS: the HSI shows no force in free space, so only while the operator presses the wall. The operator
+# script's longest stretch off the wall is 1.35 s (wall-tap: a move away of at most 1.2 s with its dwell, then a
+# thrust of at most 0.15 s), so a pair at work meets it within one such stretch; a miss says each lever's state.
 until_on() {
-  local deadline=$((SECONDS + $1)) role all
+  local seconds=$1 deadline=$((SECONDS + $1)) role all
   shift
   while ((SECONDS < deadline)); do
     all=1
     for role in "$@"; do motor_on "$role" || { all=0; break; }; done
     ((all)) && return 0
     read -rt 0.0002 -u "$never_ready" || :
+  done
+  for role in hsi top; do
+    echo "not both on in $seconds s: the $role: its newest status line: $(last_stat "$role" '"\(.state), faults \(.faults)"')," \
+      "motor on $(motor_on "$role" && echo yes || echo no), PWM $(pwm_state "$role")" >&2
   done
   return 1
 }

@@ -22,6 +22,21 @@ finish() {  # finish TITLE: the closing line, and the exit status
   [[ $failed -eq 0 ]]
 }
 
+# until_true SECONDS COMMAND...: polls every 20 ms until the command succeeds; false after SECONDS. The seconds
+# bound only a failure: a pass waits as long as the condition takes, so no start-up or transfer is guessed.
+until_true() {
+  local deadline=$((SECONDS + $1))
+  shift
+  until "$@"; do ((SECONDS < deadline)) || return 1; sleep 0.02; done
+}
+# waiting PID: the process's main thread sleeps in select, poll or epoll, so its set-up is done. candump gets there
+# once its socket is bound with its filters (it misses no frame sent after); lever-bridge once its sockets are
+# bound, its relay threads run and their real-time policy is set or refused (Relay::run's loop).
+waiting() { [[ $(cat "/proc/$1/wchan" 2>/dev/null) =~ ^(do_select|core_sys_select|do_sys_poll|ep_poll)$ ]]; }
+all_waiting() { local pid; for pid in "$@"; do waiting "$pid" || return 1; done; }  # all_waiting PID...
+# logged FILE ID N: a candump -L log holds at least N frames of ID (candump writes each frame as it comes)
+logged() { (($(grep -c " $2#" "$1" 2>/dev/null) >= $3)); }
+
 # The observers (candump) get 8 MB receive buffers: under TCG a busy guest otherwise lets them drop a few frames
 # that the bridges did relay (seen: 997 of 1000 logged on the sending side, 1000 relayed and received).
 
