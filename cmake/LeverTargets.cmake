@@ -21,3 +21,14 @@ function(lever_target_defaults target)
     target_link_options(${target} ${scope} -fsanitize=address,undefined)
   endif()
 endfunction()
+
+# A unit test program (Catch2): its test cases in ctest, labelled unit, with exit 77 (skip.hpp) reported as a skip.
+# With LEVER_UNIT_TESTS off the program is neither built by default nor in ctest: scripts/test's Release tree, whose
+# unit tests run in its ASan+UBSan tree and, in Release, on arm64 (docs/deploy.md, "CI's schedule").
+function(lever_unit_tests target prefix)
+  if(LEVER_UNIT_TESTS)
+    catch_discover_tests(${target} TEST_PREFIX "${prefix}" PROPERTIES LABELS unit SKIP_RETURN_CODE 77)
+  else()
+    set_target_properties(${target} PROPERTIES EXCLUDE_FROM_ALL ON)
+  endif()
+endfunction()
