@@ -2,8 +2,8 @@
 # The HIL means the same run on every architecture: short lever-hil scenarios (wall-tap with faults and the
 # prefilter, tdpa under delay and jitter with the predictive codec, the sphere through its driver's Butterworth,
 # Fig. 8's chain: one controller, the DAD 141.1 gauge chain, the HSI's force loop, the adaptive window) run natively
-# and, under qemu-user, as built for arm64 and armhf, must give byte-identical JSON reports and per-tick traces. The
-# reports' two wall-clock fields (wall_time_s, realtime_factor) are the only ones taken out.
+# and, under qemu-user, as built for each Arm architecture given, must give byte-identical JSON reports and per-tick
+# traces. The reports' two wall-clock fields (wall_time_s, realtime_factor) are the only ones taken out.
 # usage: hil_same_bytes.sh SOURCE_DIR NATIVE_LEVER_HIL ARCH=LEVER_HIL...
 set -uo pipefail
 source=$1 native=$2

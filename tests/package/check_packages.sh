@@ -1,18 +1,21 @@
 #!/usr/bin/env bash
-# The Debian packages as an admin gets them (scripts/package): all three for every architecture (amd64, arm64,
-# armhf), their library dependencies found by dpkg-shlibdeps, a man page for every program, lintian on every
+# The Debian packages as an admin gets them (scripts/package): all three for every architecture named (default
+# amd64, arm64 and armhf), their library dependencies found by dpkg-shlibdeps, a man page for every program, lintian on every
 # package with no error and no warning; the build machine's packages installed, purged and checked in a throw-away
 # root; the systemd units verified, a unit with a misspelt directive rejected by the same verify (so the check can
 # fail), and each unit's systemd-analyze security exposure printed and held under a ceiling.
-# usage: check_packages.sh DIST_DIR PACKAGING_SOURCE_DIR
+# usage: check_packages.sh DIST_DIR PACKAGING_SOURCE_DIR [ARCH...]
 set -uo pipefail
 dist=$1
 units=$2/systemd
+shift 2
+archs=("$@")
+((${#archs[@]})) || archs=(amd64 arm64 armhf)
 source "$(dirname "$0")/../cli/lib.sh"
 arch=$(dpkg --print-architecture)
 shopt -s nullglob
 debs=("$dist"/*.deb)
-for deb_arch in amd64 arm64 armhf; do
+for deb_arch in "${archs[@]}"; do
   for pkg in lever-fw lever-bridge lever-tools; do
     found=("$dist/${pkg}_"*"_$deb_arch.deb")
     check "$pkg for $deb_arch is in $dist" test "${#found[@]}" -eq 1
