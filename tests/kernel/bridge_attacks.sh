@@ -11,7 +11,7 @@ set -uo pipefail
 bridge=$!
 candump -r 8388608 -L vcan1 >"$out/vcan1.log" &
 dump=$!
-check "the bridge and the candump are up" until_true 60 all_waiting $bridge $dump
+check "the bridge and the candump are up" wait_until_true 60 all_waiting $bridge $dump
 
 attack() {  # attack KIND FROM SEQUENCE [extra]
   "$bin/lever-bridge-attack" --key "$key" --from "$2" --to 127.0.0.1:5001 --kind "$1" --count 20 \

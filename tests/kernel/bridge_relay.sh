@@ -17,7 +17,7 @@ candump -r 8388608 -L vcan0 >"$out/vcan0.log" &
 dump0=$!
 candump -r 8388608 -L vcan1 >"$out/vcan1.log" &
 dump1=$!
-check "both bridges and both candumps are up" until_true 60 all_waiting $bridge_a $bridge_b $dump0 $dump1
+check "both bridges and both candumps are up" wait_until_true 60 all_waiting $bridge_a $bridge_b $dump0 $dump1
 
 # Real time by default (root may): the two relay threads under SCHED_FIFO 40, housekeeping under the normal policy.
 policy_of() {  # policy_of PID THREAD_NAME: "FIFO 40", "OTHER 0", ...; empty when no thread has the name
@@ -43,7 +43,7 @@ wait $gen
 cangen vcan1 -I 111 -L 8 -D i -g 1 -n 500
 # Until the last frame of each direction has crossed (or 60 s: a failure's bound), then the bridges stop.
 crossed() { logged "$out/vcan1.log" 101 1000 && logged "$out/vcan0.log" 111 500; }
-until_true 60 crossed
+wait_until_true 60 crossed
 kill -TERM $bridge_a $bridge_b
 wait $bridge_a; code_a=$?
 wait $bridge_b; code_b=$?
@@ -74,10 +74,10 @@ check "log2asc converts the recording" log2asc -I "$out/bridge-a.log" -O "$work/
 # Replayed onto vcan1 with canplayer, candump sees the same frames in the same order.
 candump -r 8388608 -L vcan1 >"$out/replay.log" &
 dump=$!
-check "the replay's candump is up" until_true 60 waiting $dump
+check "the replay's candump is up" wait_until_true 60 waiting $dump
 canplayer -I "$out/bridge-a.log" vcan1=vcan0
 has_lines() { (($(wc -l <"$1") >= $2)); }  # has_lines FILE N
-until_true 60 has_lines "$out/replay.log" "$(wc -l <"$out/bridge-a.log")"
+wait_until_true 60 has_lines "$out/replay.log" "$(wc -l <"$out/bridge-a.log")"
 kill $dump; wait $dump 2>/dev/null
 frames "$out/bridge-a.log" >"$work/recorded"
 frames "$out/replay.log" >"$work/replayed"
@@ -97,9 +97,9 @@ unprivileged "$bin/lever-bridge" --can vcan1 --bind 127.0.0.1:5011 --peer 127.0.
 bridge_d=$!
 candump -r 8388608 -L vcan1 >"$out/unprivileged.log" &
 dump=$!
-check "unprivileged: both bridges and the candump are up" until_true 60 all_waiting $bridge_c $bridge_d $dump
+check "unprivileged: both bridges and the candump are up" wait_until_true 60 all_waiting $bridge_c $bridge_d $dump
 cangen vcan0 -I 102 -L 8 -D i -g 2 -n 20
-until_true 60 logged "$out/unprivileged.log" 102 20
+wait_until_true 60 logged "$out/unprivileged.log" 102 20
 kill -TERM $bridge_c $bridge_d
 wait $bridge_c; code_c=$?
 wait $bridge_d

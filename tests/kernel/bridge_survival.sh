@@ -15,7 +15,7 @@ bridge_a=$!
 start_b
 candump -r 8388608 -L vcan1 >"$out/vcan1.log" &
 dump=$!
-check "both bridges and the candump are up" until_true 60 all_waiting $bridge_a $bridge_b $dump
+check "both bridges and the candump are up" wait_until_true 60 all_waiting $bridge_a $bridge_b $dump
 count() { grep -c " $1#" "$out/vcan1.log"; }
 
 # 1. The interface goes down under the bridge and comes back.

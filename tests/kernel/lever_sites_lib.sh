@@ -311,15 +311,6 @@ pin_inactive() {
   fi
   if [[ ${!inverted} == true ]]; then [[ $2 == 1000000 ]]; else [[ $2 == 0 ]]; fi
 }
-# wait_until_true SECONDS COMMAND...: until the command succeeds (guest time), polling every 10 ms
-wait_until_true() {
-  local deadline=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    ((SECONDS < deadline)) || { echo "timed out waiting for: $*" >&2; return 1; }
-    sleep 0.01
-  done
-}
 # no_torque ROLE: the lever's driver makes no torque, read from the hardware's outputs: its PWM pin gives it no duty
 # (pin_inactive), or its enable line (MOTOR_EN, line 0 of its motor chip) is low. Neither the controller's enabled flag nor the
 # lever's own telemetry.

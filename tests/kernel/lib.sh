@@ -22,12 +22,15 @@ finish() {  # finish TITLE: the closing line, and the exit status
   [[ $failed -eq 0 ]]
 }
 
-# until_true SECONDS COMMAND...: polls every 20 ms until the command succeeds; false after SECONDS. The seconds
-# bound only a failure: a pass waits as long as the condition takes, so no start-up or transfer is guessed.
-until_true() {
+# wait_until_true SECONDS COMMAND...: until the command succeeds, polling every 10 ms (the guest's time where it
+# runs in virtual time). The seconds bound only a failure: a pass waits as long as the condition takes.
+wait_until_true() {
   local deadline=$((SECONDS + $1))
   shift
-  until "$@"; do ((SECONDS < deadline)) || return 1; sleep 0.02; done
+  until "$@"; do
+    ((SECONDS < deadline)) || { echo "timed out waiting for: $*" >&2; return 1; }
+    sleep 0.01
+  done
 }
 # waiting PID: the process's main thread sleeps in select, poll or epoll, so its set-up is done. candump gets there
 # once its socket is bound with its filters (it misses no frame sent after); lever-bridge once its sockets are

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The Debian packages as an admin gets them (scripts/package): all three for every architecture named (default
-# amd64, arm64 and armhf), their library dependencies found by dpkg-shlibdeps, a man page for every program, lintian on every
-# package with no error and no warning; the build machine's packages installed, purged and checked in a throw-away
-# root; the systemd units verified, a unit with a misspelt directive rejected by the same verify (so the check can
-# fail), and each unit's systemd-analyze security exposure printed and held under a ceiling.
+# amd64, arm64 and armhf), their library dependencies found by dpkg-shlibdeps, a man page for every program, lintian
+# on every package with no error and no warning; the build machine's packages installed, purged and checked in a
+# throw-away root; the systemd units verified, a unit with a misspelt directive rejected by the same verify (so the
+# check can fail), and each unit's systemd-analyze security exposure printed and held under a ceiling.
 # usage: check_packages.sh DIST_DIR PACKAGING_SOURCE_DIR [ARCH...]
 set -uo pipefail
 dist=$1
