@@ -287,3 +287,20 @@ TEST_CASE("in contact the TOP's pull aims no further past the lever than the mot
   run_until(6000, hsi, 0.0, true);
   CHECK(t.position_ref_rad == Approx(hsi).margin(1e-3));
 }
+
+// Under tdpa the port limits the velocity the TOP applies and counts its power; the reference's low-pass after it would
+// apply a velocity the port never counted (in the HIL at 100 ms the levers then trip: docs/firmware.md).
+TEST_CASE("a reference low-pass under tdpa is refused; without tdpa it is taken", "[passivity]") {
+  LeverConfig config;
+  config.role = lever::protocol::Role::top;
+  config.position.reference_velocity_cutoff_hz = 12.5;
+  for (const PassivityMode mode : {PassivityMode::off, PassivityMode::observe}) {
+    config.passivity.mode = mode;
+    CHECK(is_valid(config));
+  }
+  config.passivity.mode = PassivityMode::tdpa;
+  CHECK(reference_low_pass_conflicts(config));
+  CHECK_FALSE(is_valid(config));
+  config.position.reference_velocity_cutoff_hz = 0.0;
+  CHECK(is_valid(config));
+}

@@ -14,6 +14,7 @@
 //   so the same bound is judged again 0.5 s after each contact, at rest (docs/firmware.md says why both);
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
 #include <catch2/catch.hpp>
+#include <stdexcept>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -304,4 +305,15 @@ TEST_CASE("passivity table", "[.][passivity-table]") {
     }
   }
   SUCCEED();
+}
+
+// lever-fw refuses the same configuration (tests/cli/lever_fw_cli.sh); the HIL says why rather than run it.
+TEST_CASE("the HIL refuses a TOP with a reference low-pass under tdpa", "[hil][passivity]") {
+  SimConfig c;
+  c.duration_s = 0.1;
+  c.top_firmware.position.reference_velocity_cutoff_hz = 12.5;
+  c.top_firmware.passivity.mode = fw::PassivityMode::tdpa;
+  CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
+  c.top_firmware.passivity.mode = fw::PassivityMode::off;
+  CHECK_NOTHROW(run_simulation(c));
 }

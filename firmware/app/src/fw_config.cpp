@@ -247,6 +247,9 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
     return fail("homing.torque_limit_nm", "must not exceed safety.torque_limit_nm");
   if (l.homing.direction != 1.0 && l.homing.direction != -1.0) return fail("homing.direction", "must be -1 or 1");
   if (auto problem = certain_fault_at_rest(l)) return fail(problem->keys, problem->text);
+  if (fw::reference_low_pass_conflicts(l))
+    return fail("control.position.reference_velocity_cutoff_hz, control.passivity.mode",
+                "must be 0 under tdpa: the low-pass would apply a velocity the passivity port never counted");
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
   if (const auto gap = board::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);

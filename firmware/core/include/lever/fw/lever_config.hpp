@@ -85,6 +85,13 @@ struct LeverConfig {
   Tick safe_hold_ticks = 500;        // ...for this long, then zero torque
 };
 
+// Under tdpa the passivity port limits the velocity the TOP applies and counts its power; the reference's low-pass
+// after it would apply a velocity the port never counted (in the HIL at 100 ms of delay the levers then trip their
+// protection: docs/firmware.md, "Passivity under delay").
+constexpr bool reference_low_pass_conflicts(const LeverConfig& c) noexcept {
+  return c.passivity.mode == PassivityMode::tdpa && c.position.reference_velocity_cutoff_hz > 0.0;
+}
+
 constexpr bool is_valid(const LeverConfig& c) noexcept {
   const auto& h = c.homing;
   return c.pair < protocol::kPairCount && c.heartbeat_period > 0 && c.comms_timeout > 0 && c.refresh_period > 0 &&
@@ -97,7 +104,7 @@ constexpr bool is_valid(const LeverConfig& c) noexcept {
          c.timing.long_step_us > 0 && (h.direction == 1.0 || h.direction == -1.0) && h.speed_rad_s > 0 &&
          h.torque_limit_nm > 0 && h.torque_limit_nm <= c.torque_limit_nm && h.stall_ticks > 0 &&
          std::isfinite(h.home_position_rad) && h.max_travel_rad > 0 && is_valid(c.passivity) &&
-         is_valid(c.adaptive_window) && c.display.lever_arm_m > 0;
+         is_valid(c.adaptive_window) && c.display.lever_arm_m > 0 && !reference_low_pass_conflicts(c);
 }
 
 }  // namespace lever::fw
