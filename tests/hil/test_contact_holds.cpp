@@ -16,7 +16,8 @@ using namespace lever::hil;
 
 // Expected to fail: with its derived damping the assumed AD620 chain still chatters open loop, and the DAD 141.1 (at
 // 0.6, its derived 0.4 not applied) chatters open loop in every run and with its force loop on seed 1 of the sites
-// (docs/hil-model.md, "Re-derived on each gauge chain").
+// (docs/hil-model.md, "Re-derived on each gauge chain"). The design that holds here fails the passivity suite and is
+// not applied ("The contact designed on seeds of its own").
 TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-loop setting",
           "[hil][contact][!shouldfail]") {
   int failing = 0, setups = 0;
@@ -84,4 +85,84 @@ TEST_CASE("the HSI's contact damping on each gauge chain, by the documented meth
       std::printf("contact damping: %s, %.2f N m s/rad: %s %%, mean %.2f %%\n",
                   chain == GaugeChain::dad141 ? "dad141" : "paper-adc", damping, seeds.c_str(), 100.0 * sum / 3.0);
     }
+}
+
+// The method that designs the contact on seeds of its own (docs/hil-model.md, "The contact designed on seeds of its
+// own, then checked on the check's"): the HIL's TOP's reference low-pass, each chain's HSI contact damping and the
+// DAD's force loop, chosen on seeds 4-9 against the check's bounds; printed, hidden, a tool rather than a check
+// (lever_tests_hil "[contact-design]").
+namespace {
+
+struct DesignRun {
+  bool holds = true;
+  double mean_jnd_two_sites = 0.0;
+  int failing = 0, runs = 0;
+};
+
+DesignRun design_runs(GaugeChain chain, double cutoff_hz, double damping, bool force_loop) {
+  DesignRun d;
+  for (const auto& [topology_name, topology] : kTopologies)
+    for (std::uint64_t seed = 4; seed <= 9; ++seed) {
+      SimConfig c;
+      c.scenario = ScenarioKind::wall_tap;
+      c.seed = seed;
+      c.topology = topology;
+      c.gauge_chain = chain;
+      c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+      c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+      c.top_firmware.position.reference_velocity_cutoff_hz = cutoff_hz;
+      c.hsi_contact_damping_nms = damping;
+      set_hsi_force_loop(c, force_loop);
+      const auto r = run_simulation(c);
+      const bool holds = test::contact_verdict(r).holds();
+      d.holds = d.holds && holds;
+      d.failing += !holds;
+      ++d.runs;
+      if (topology == Topology::two_sites) d.mean_jnd_two_sites += r.force_jnd_violation / 6.0;
+    }
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("the contact designed on seeds 4-9, by the documented method", "[.][contact-design]") {
+  constexpr double kGrid[] = {0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.6, 2.0};
+  const std::pair<const char*, GaugeChain> chains[] = {{"dad141", GaugeChain::dad141},
+                                                       {"paper-adc", GaugeChain::paper_adc}};
+  for (const double cutoff_hz : {12.5, 6.25}) {
+    bool every_chain = true;
+    double picked[2] = {0.0, 0.0};
+    for (int i = 0; i < 2; ++i) {
+      const auto& [chain_name, chain] = chains[i];
+      double best_jnd = 0.0;
+      bool any = false;
+      for (const double damping : kGrid) {
+        const DesignRun d = design_runs(chain, cutoff_hz, damping, false);
+        std::printf(
+            "contact design: low-pass %.2f Hz, %s, damping %.2f, open loop: %d of %d runs chatter, "
+            "force_jnd_violation %.2f %% (two sites)\n",
+            cutoff_hz, chain_name, damping, d.failing, d.runs, 100.0 * d.mean_jnd_two_sites);
+        if (!d.holds) continue;
+        // Ascending grid: a later damping within 0.01 points of the best takes it (the tie goes to the larger).
+        const double jnd = 100.0 * d.mean_jnd_two_sites;
+        if (!any || jnd <= best_jnd + 0.01) {
+          if (!any || jnd < best_jnd) best_jnd = jnd;
+          picked[i] = damping;
+          any = true;
+        }
+      }
+      every_chain = every_chain && any;
+    }
+    if (!every_chain) {
+      std::printf("contact design: low-pass %.2f Hz leaves a chain no damping that holds\n", cutoff_hz);
+      continue;
+    }
+    std::printf("contact design: pick low-pass %.2f Hz, dad141 damping %.2f, paper-adc damping %.2f\n", cutoff_hz,
+                picked[0], picked[1]);
+    const DesignRun loop = design_runs(GaugeChain::dad141, cutoff_hz, picked[0], true);
+    std::printf("contact design: dad141 force loop on: %d of %d runs chatter: the loop is %s\n", loop.failing,
+                loop.runs, loop.holds ? "kept" : "left out");
+    return;
+  }
+  std::printf("contact design: nothing holds; nothing is applied\n");
 }

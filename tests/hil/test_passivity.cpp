@@ -14,10 +14,10 @@
 //   so the same bound is judged again 0.5 s after each contact, at rest (docs/firmware.md says why both);
 // - chatter: contact onsets per second at most twice the zero-delay run's (each tap may bounce once).
 #include <catch2/catch.hpp>
-#include <stdexcept>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "lever/hil/simulation.hpp"
 
