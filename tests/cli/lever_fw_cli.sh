@@ -54,7 +54,9 @@ bad_config "bad choice" "homing.method: must be one of absolute, hard_stop, inde
 bad_config "boolean expected" "control.display.closed_loop: must be true or false" $'[control.display]\nclosed_loop = 1'
 bad_config "syntax error" "bad.toml:2:" $'[lever]\nrole = '
 bad_config "keys that disagree" "must not exceed safety.torque_limit_nm" $'[safety]\ntorque_limit_nm = 0.1\nsafe_hold_torque_nm = 0.2'
-bad_config "a low-pass after the passivity port" "control.position.reference_velocity_cutoff_hz, control.passivity.mode: must be 0 under tdpa" \
+bad_config "a low-pass after the passivity port" "control.position.reference_velocity_cutoff_hz, control.passivity.mode: must be 0 on a TOP under tdpa" \
+  $'[lever]\nrole = "top"\n[control.position]\nreference_velocity_cutoff_hz = 12.5\n[control.passivity]\nmode = "tdpa"'
+taken_config "an HSI has no position loop, so the key does nothing there" \
   $'[control.position]\nreference_velocity_cutoff_hz = 12.5\n[control.passivity]\nmode = "tdpa"'
 # Relations that make a fault certain at rest (issue 40, item 5), each at its edge, and the value just past it taken.
 bad_config "COMMS certain at rest" "link.comms_timeout_ms: 25 ms is not longer than the gap between the peer's frames at rest (25 ms" \

@@ -289,7 +289,7 @@ TEST_CASE("in contact the TOP's pull aims no further past the lever than the mot
 }
 
 // Under tdpa the port limits the velocity the TOP applies and counts its power; the reference's low-pass after it would
-// apply a velocity the port never counted (in the HIL at 100 ms the levers then trip: docs/firmware.md).
+// apply a velocity the port never counted, and before it lags the passive reference (docs/firmware.md).
 TEST_CASE("a reference low-pass under tdpa is refused; without tdpa it is taken", "[passivity]") {
   LeverConfig config;
   config.role = lever::protocol::Role::top;
@@ -302,5 +302,9 @@ TEST_CASE("a reference low-pass under tdpa is refused; without tdpa it is taken"
   CHECK(reference_low_pass_conflicts(config));
   CHECK_FALSE(is_valid(config));
   config.position.reference_velocity_cutoff_hz = 0.0;
+  CHECK(is_valid(config));
+  // The HSI has no position loop, so the key does nothing there.
+  config.role = lever::protocol::Role::hsi;
+  config.position.reference_velocity_cutoff_hz = 12.5;
   CHECK(is_valid(config));
 }

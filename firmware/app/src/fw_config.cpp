@@ -249,7 +249,8 @@ LoadedConfig load_fw_config(const std::string& path, const ConfigOverrides& over
   if (auto problem = certain_fault_at_rest(l)) return fail(problem->keys, problem->text);
   if (fw::reference_low_pass_conflicts(l))
     return fail("control.position.reference_velocity_cutoff_hz, control.passivity.mode",
-                "must be 0 under tdpa: the low-pass would apply a velocity the passivity port never counted");
+                "must be 0 on a TOP under tdpa: after the passivity port the low-pass would apply a velocity the port "
+                "never counted (docs/firmware.md, \"Passivity under delay\")");
   if (!(l.gauge.raw_min < l.gauge.raw_max))
     return fail("gauge.raw_min, gauge.raw_max", "the minimum must be below the maximum");
   if (const auto gap = board::longest_gap(gauge_config(out.config.board), kMissedPollsTolerated);
