@@ -22,7 +22,21 @@ struct ContactVerdict {
   bool holds() const { return onsets_ok && rebounds_ok; }
 };
 
-// A wall-tap run at p = 0 (the check's setting; the caller sets it up).
+// The check's setting: wall-tap at p = 0, both directions sending every change.
+inline hil::SimConfig contact_check_setting(hil::Topology topology, hil::GaugeChain chain, bool force_loop,
+                                            std::uint64_t seed) {
+  hil::SimConfig c;
+  c.scenario = hil::ScenarioKind::wall_tap;
+  c.seed = seed;
+  c.topology = topology;
+  c.gauge_chain = chain;
+  c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+  c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+  hil::set_hsi_force_loop(c, force_loop);
+  return c;
+}
+
+// A wall-tap run at p = 0 (the check's setting).
 inline ContactVerdict contact_verdict(const hil::SimResult& r) {
   ContactVerdict v;
   const double armed_s = static_cast<double>(r.armed_ticks) * 1e-3;

@@ -25,14 +25,7 @@ TEST_CASE("at p = 0 the contact holds in every topology, gauge chain and force-l
     for (const auto& [chain_name, chain] : kGaugeChains)
       for (const auto& [loop_name, loop] : kOnOff)
         for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-          SimConfig c;
-          c.scenario = ScenarioKind::wall_tap;
-          c.seed = seed;
-          c.topology = topology;
-          c.gauge_chain = chain;
-          c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
-          c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
-          set_hsi_force_loop(c, loop);
+          const SimConfig c = test::contact_check_setting(topology, chain, loop, seed);
           if (!hsi_force_loop_offered(c) && loop) {
             CHECK_THROWS_AS(run_simulation(c), std::invalid_argument);
             continue;
@@ -68,13 +61,7 @@ TEST_CASE("the HSI's contact damping on each gauge chain, by the documented meth
       double sum = 0.0;
       std::string seeds;
       for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-        SimConfig c;
-        c.scenario = ScenarioKind::wall_tap;
-        c.seed = seed;
-        c.topology = Topology::two_sites;
-        c.gauge_chain = chain;
-        c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
-        c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+        SimConfig c = test::contact_check_setting(Topology::two_sites, chain, false, seed);
         c.hsi_contact_damping_nms = damping;
         const auto r = run_simulation(c);
         sum += r.force_jnd_violation;
@@ -103,16 +90,9 @@ DesignRun design_runs(GaugeChain chain, double cutoff_hz, double damping, bool f
   DesignRun d;
   for (const auto& [topology_name, topology] : kTopologies)
     for (std::uint64_t seed = 4; seed <= 9; ++seed) {
-      SimConfig c;
-      c.scenario = ScenarioKind::wall_tap;
-      c.seed = seed;
-      c.topology = topology;
-      c.gauge_chain = chain;
-      c.velocity_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
-      c.force_codec = {codec::Mode::deadband, 0.0, 0.0, 0.0};
+      SimConfig c = test::contact_check_setting(topology, chain, force_loop, seed);
       c.top_firmware.position.reference_velocity_cutoff_hz = cutoff_hz;
       c.hsi_contact_damping_nms = damping;
-      set_hsi_force_loop(c, force_loop);
       const auto r = run_simulation(c);
       const bool holds = test::contact_verdict(r).holds();
       d.holds = d.holds && holds;
