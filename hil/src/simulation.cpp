@@ -27,11 +27,10 @@ void set_hsi_force_loop(SimConfig& config, bool on) {
 bool hsi_force_loop_offered(const SimConfig& config) { return !reads_paper_gauge(config); }
 
 void check_offered(const SimConfig& config) {
-  for (const fw::LeverConfig* fw : {&config.hsi_firmware, &config.top_firmware})
-    if (fw::reference_low_pass_conflicts(*fw))
-      throw std::invalid_argument(
-          "the TOP's reference low-pass must be 0 under tdpa: after the passivity port it would apply a velocity the "
-          "port never counted (docs/firmware.md, \"Passivity under delay\")");
+  if (fw::reference_low_pass_conflicts(config.top_firmware))
+    throw std::invalid_argument(
+        "the TOP's reference low-pass must be 0 under tdpa: after the passivity port it would apply a velocity the "
+        "port never counted (docs/firmware.md, \"Passivity under delay\")");
   if (config.hsi_firmware.display.closed_loop && config.hsi_firmware.use_force_sensor &&
       !hsi_force_loop_offered(config))
     throw std::invalid_argument(

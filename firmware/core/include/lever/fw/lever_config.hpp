@@ -86,9 +86,8 @@ struct LeverConfig {
 };
 
 // Under tdpa the TOP's passivity port limits the velocity the TOP applies and counts its power; the reference's
-// low-pass after it would apply a velocity the port never counted, and before it lags the passive reference (in the
-// HIL either way the levers trip their protection at 100 ms of delay: docs/firmware.md, "Passivity under delay").
-// The HSI has no position loop: the key does nothing there.
+// low-pass after it would apply a velocity the port never counted, and before it lags the passive reference
+// (docs/firmware.md, "Passivity under delay"). The HSI has no position loop: the key does nothing there.
 constexpr bool reference_low_pass_conflicts(const LeverConfig& c) noexcept {
   return c.role == protocol::Role::top && c.passivity.mode == PassivityMode::tdpa &&
          c.position.reference_velocity_cutoff_hz > 0.0;
