@@ -38,9 +38,10 @@ SimConfig serve_sim_config(const ServeOptions& o, const ServePair& pair) {
   sim.velocity_codec = pair.hsi.lever.motion_codec;
   sim.force_codec = pair.top.lever.force_codec;
   sim.hsi_firmware = pair.hsi.lever;
-  // The pair's HSI runs its own configuration's contact damping, not the one the HIL derives for its gauge chain.
+  // The pair runs its own configurations' contact settings, not the ones the HIL designs for its own HSI's velocity.
   sim.hsi_contact_damping_nms = pair.hsi.lever.display.contact_damping_nms;
   sim.top_firmware = pair.top.lever;
+  sim.top_reference_cutoff_hz = pair.top.lever.position.reference_velocity_cutoff_hz;
   return sim;
 }
 

@@ -36,8 +36,12 @@ int run_sim(const app::FwConfig& config, double duration_s, bool stats_json, boo
   // The simulated gauge is the HIL's ADC, not the board's Modbus amplifier (which reports newtons): it keeps
   // the calibration the HIL's gauge model is made for.
   simulated.gauge = hil::SimConfig::default_firmware(config.lever.role).gauge;
-  // An HSI runs its configuration's contact damping, not the one the HIL derives for its gauge chain.
-  if (hsi) sim.hsi_contact_damping_nms = config.lever.display.contact_damping_nms;
+  // The contact settings a board runs (its configuration's, the other lever's a board's defaults), not the ones the
+  // HIL designs for its own HSI's velocity (hil::contact_settings).
+  const fw::LeverConfig& hsi_lever = hsi ? config.lever : fw::LeverConfig{};
+  const fw::LeverConfig& top_lever = hsi ? fw::LeverConfig{} : config.lever;
+  sim.hsi_contact_damping_nms = hsi_lever.display.contact_damping_nms;
+  sim.top_reference_cutoff_hz = top_lever.position.reference_velocity_cutoff_hz;
   sim.velocity_codec = (hsi ? config.lever : sim.hsi_firmware).motion_codec;
   sim.force_codec = (hsi ? sim.top_firmware : config.lever).force_codec;
   const auto wall_start = std::chrono::steady_clock::now();

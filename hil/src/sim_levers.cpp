@@ -18,17 +18,20 @@ fw::LeverConfig firmware_for(const SimConfig& config, fw::LeverConfig fw) {
 fw::LeverConfig hsi_firmware(const SimConfig& config) {
   fw::LeverConfig fw = config.hsi_firmware;
   fw.motion_codec = config.velocity_codec;
-  fw.display.contact_damping_nms = config.hsi_contact_damping_nms.value_or(chain_contact_damping_nms(config));
-  return firmware_for(config, fw);
-}
-
-fw::LeverConfig top_firmware(const SimConfig& config) {
-  fw::LeverConfig fw = config.top_firmware;
-  fw.force_codec = config.force_codec;
+  fw.display.contact_damping_nms =
+      config.hsi_contact_damping_nms.value_or(contact_settings(config).hsi_contact_damping_nms);
   return firmware_for(config, fw);
 }
 
 }  // namespace
+
+fw::LeverConfig configured_top_firmware(const SimConfig& config) {
+  fw::LeverConfig fw = config.top_firmware;
+  fw.force_codec = config.force_codec;
+  fw.position.reference_velocity_cutoff_hz =
+      config.top_reference_cutoff_hz.value_or(contact_settings(config).top_reference_cutoff_hz);
+  return firmware_for(config, fw);
+}
 
 bool reads_paper_gauge(const SimConfig& config) {
   return config.gauge_chain == GaugeChain::paper_adc ||
@@ -39,12 +42,12 @@ StrainGaugeParams effective_gauge(const SimConfig& config) {
   return reads_paper_gauge(config) ? paper_adc_gauge() : config.gauge;
 }
 
-double chain_contact_damping_nms(const SimConfig& config) {
-  // The paper's chain: the lowest mean force_jnd_violation of the documented grid (docs/hil-model.md, "Re-derived
-  // on each gauge chain"); the unfiltered ADC needs no damper. The DAD keeps 0.6, its value before issue 39, NOT
-  // its derived 0.4: with 0.4 the TOP's predicted reference runs away after a rebooted HSI goes silent (the reboot
-  // test), a weakness of the predictive receiver that 0.4 is to wait for.
-  return reads_paper_gauge(config) ? 0.05 : 0.6;
+ContactSettings contact_settings(const SimConfig& config) {
+  // Each pair's source and the methods that chose it: docs/hil-model.md, from "The contact designed on seeds of its
+  // own" to "The design's dampings within the timing budget".
+  const bool paper = reads_paper_gauge(config);
+  if (config.top_firmware.passivity.mode == fw::PassivityMode::tdpa) return {0.0, paper ? 0.05 : 0.6};
+  return {6.25, paper ? 0.4 : 1.6};
 }
 
 PowerUpAngles power_up_angles(const SimConfig& config) {
@@ -64,7 +67,7 @@ SimLevers::SimLevers(const SimConfig& config, const PowerUpAngles& angles, Trans
   const Nanos tx_delay = config.topology == Topology::one_controller ? 0 : kFirmwareTxDelay;
   hsi_ = std::make_unique<LeverSite<SimHsi>>(hsi_fw, angles.hsi, gauge, config.seed * 4 + 3, transport.hsi_bus(), now,
                                              tx_delay);
-  top_ = std::make_unique<LeverSite<SimTop>>(top_firmware(config), angles.top, gauge, config.seed * 4 + 4,
+  top_ = std::make_unique<LeverSite<SimTop>>(configured_top_firmware(config), angles.top, gauge, config.seed * 4 + 4,
                                              transport.top_bus(), now, tx_delay);
   if (config.encoder_interface == EncoderInterface::counter)
     for (SimHal* hal : {&hsi_->hal, &top_->hal}) hal->encoder_.set_queue_capacity(QuadratureEncoder::kMaxQueue);

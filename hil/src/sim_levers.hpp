@@ -16,6 +16,9 @@ struct PowerUpAngles {
 };
 PowerUpAngles power_up_angles(const SimConfig& config);
 
+// The TOP's firmware as the run configures it: the run's force codec, its contact settings, the gauge calibrated.
+fw::LeverConfig configured_top_firmware(const SimConfig& config);
+
 class SimLevers {
  public:
   SimLevers(const SimConfig& config, const PowerUpAngles& angles, Transport& transport, const Nanos& now);

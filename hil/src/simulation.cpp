@@ -27,7 +27,7 @@ void set_hsi_force_loop(SimConfig& config, bool on) {
 bool hsi_force_loop_offered(const SimConfig& config) { return !reads_paper_gauge(config); }
 
 void check_offered(const SimConfig& config) {
-  if (fw::reference_low_pass_conflicts(config.top_firmware))
+  if (fw::reference_low_pass_conflicts(configured_top_firmware(config)))
     throw std::invalid_argument(
         "the TOP's reference low-pass must be 0 under tdpa: after the passivity port it would apply a velocity the "
         "port never counted (docs/firmware.md, \"Passivity under delay\")");

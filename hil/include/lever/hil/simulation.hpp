@@ -70,10 +70,15 @@ struct SimConfig;
 // The strain-gauge chain the run's levers read: the paper's ADC or the DAD 141.1 (config.gauge), by gauge_chain.
 bool reads_paper_gauge(const SimConfig& config);
 StrainGaugeParams effective_gauge(const SimConfig& config);
-// The HSI's contact damping (N m s/rad) for the run's gauge chain: the paper's chain's by the method docs/hil-model.md
-// documents ("Re-derived on each gauge chain"); the DAD's stays at its previous 0.6 until the reboot test's runaway,
-// which its derived 0.4 exposes, is fixed.
-double chain_contact_damping_nms(const SimConfig& config);
+// The contact's settings, a pair designed together (docs/hil-model.md, "The design applied where its low-pass may
+// run"): the TOP's reference low-pass and the HSI's contact damping on the run's gauge chain. Without tdpa on the
+// TOP, the design's ("The contact designed on seeds of its own", its dampings within the timing budget); under
+// tdpa, where the firmware refuses the low-pass, the settings the passivity suite was derived with.
+struct ContactSettings {
+  double top_reference_cutoff_hz = 0.0;
+  double hsi_contact_damping_nms = 0.0;
+};
+ContactSettings contact_settings(const SimConfig& config);
 
 struct SimConfig {
   ScenarioKind scenario = ScenarioKind::wall_tap;
@@ -91,9 +96,10 @@ struct SimConfig {
   WallParams wall{};
   GaugeChain gauge_chain = GaugeChain::topology;
   StrainGaugeParams gauge{};  // the DAD 141.1's settings, when it is the chain
-  // The HSI's contact damping; empty: the gauge chain's own (chain_contact_damping_nms), which replaces the one in
-  // hsi_firmware as the gauge's calibration does.
+  // The HSI's contact damping and the TOP's reference low-pass; empty: contact_settings', which replace the ones in
+  // hsi_firmware and top_firmware as the gauge's calibration does.
   std::optional<double> hsi_contact_damping_nms;
+  std::optional<double> top_reference_cutoff_hz;
   OperatorParams operator_params{};
   fw::LeverConfig hsi_firmware = default_firmware(protocol::Role::hsi);
   fw::LeverConfig top_firmware = default_firmware(protocol::Role::top);
