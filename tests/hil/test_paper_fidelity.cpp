@@ -175,9 +175,9 @@ class Table {
          "the reading the row states; inferred, a figure the paper infers itself; variant, the HIL's run differs from "
          "the paper's setup; effect, a change from one rate to another, its direction counted only if every seed's "
          "change has the paper's sign (its size is the means' change).\n\nThe lever's rows (F8) are measured in one "
-         "controller on the DAD 141.1 gauge chain with the HSI's force "
-         "loop on, the one setup in the paper's topology that passes the contact check at p = 0; the assumed AD620 "
-         "chain (an AD620 and a 16-bit ADC, `paper-adc`) chatters there with the loop and without it.\n";
+         "controller on the DAD 141.1 gauge chain with the HSI's force loop on, a setup that passes the contact check "
+         "at p = 0: the paper's HSI closes that loop, and on the assumed AD620 chain (an AD620 and a 16-bit ADC, "
+         "`paper-adc`) the loop makes the contact chatter and is refused.\n";
     return o.str();
   }
 
