@@ -2,6 +2,7 @@
 // The contact check's bounds (docs/hil-model.md, "The contact check"), for the check itself and for the tests whose
 // figures count only on a setup whose contact holds (the fidelity table's Fig. 8 rows).
 #include <cstdint>
+#include <optional>
 
 #include "lever/hil/simulation.hpp"
 
@@ -45,5 +46,22 @@ inline ContactVerdict contact_verdict(const hil::SimResult& r) {
   v.rebounds_ok = r.contact_rebounds_of_rebounds <= kReboundsOfReboundsPerRun;
   return v;
 }
+
+// The designs' pick of a damping on an ascending grid (docs/hil-model.md, "The contact designed on seeds of its
+// own"): the least force_jnd_violation in points, a later damping within 0.01 points of the best taking it (the tie
+// goes to the larger).
+struct LeastJndPick {
+  std::optional<double> damping_nms;
+  double jnd_percent = 0.0;  // the picked damping's
+  void offer(double damping, double jnd) {
+    if (damping_nms && jnd > best_ + 0.01) return;
+    if (!damping_nms || jnd < best_) best_ = jnd;
+    damping_nms = damping;
+    jnd_percent = jnd;
+  }
+
+ private:
+  double best_ = 0.0;
+};
 
 }  // namespace lever::test

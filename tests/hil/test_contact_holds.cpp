@@ -108,24 +108,17 @@ TEST_CASE("the contact designed on seeds 4-9, by the documented method", "[.][co
     double picked[2] = {0.0, 0.0};
     for (int i = 0; i < 2; ++i) {
       const auto& [chain_name, chain] = chains[i];
-      double best_jnd = 0.0;
-      bool any = false;
+      test::LeastJndPick pick;
       for (const double damping : kGrid) {
         const DesignRun d = design_runs(chain, cutoff_hz, damping, false);
         std::printf(
             "contact design: low-pass %.2f Hz, %s, damping %.2f, open loop: %d of %d runs chatter, "
             "force_jnd_violation %.2f %% (two sites)\n",
             cutoff_hz, chain_name, damping, d.failing, d.runs, 100.0 * d.mean_jnd_two_sites);
-        if (!d.holds()) continue;
-        // Ascending grid: a later damping within 0.01 points of the best takes it (the tie goes to the larger).
-        const double jnd = 100.0 * d.mean_jnd_two_sites;
-        if (!any || jnd <= best_jnd + 0.01) {
-          if (!any || jnd < best_jnd) best_jnd = jnd;
-          picked[i] = damping;
-          any = true;
-        }
+        if (d.holds()) pick.offer(damping, 100.0 * d.mean_jnd_two_sites);
       }
-      every_chain = every_chain && any;
+      picked[i] = pick.damping_nms.value_or(0.0);
+      every_chain = every_chain && pick.damping_nms;
     }
     if (!every_chain) {
       std::printf("contact design: low-pass %.2f Hz leaves a chain no damping that holds\n", cutoff_hz);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_check.hpp"
 #include "lever/fw/lever_config.hpp"
 #include "lever/hil/simulation.hpp"
 #include "loop_response.hpp"
@@ -49,8 +50,10 @@ struct Loops {
     ReferencePath reference;
     double damping_nms = 0.0;
   };
-  ContactSide hil_contact{{hil::contact_settings(sim).top_reference_cutoff_hz, false},
-                          hil::contact_settings(sim).hsi_contact_damping_nms};
+  static ContactSide side_of(const hil::ContactSettings& c) {
+    return {{c.top_reference_cutoff_hz, false}, c.hsi_contact_damping_nms};
+  }
+  ContactSide hil_contact = side_of(hil::contact_settings(sim));
   ContactSide board_contact{{fw::LeverConfig{}.position.reference_velocity_cutoff_hz, false},
                             fw::LeverConfig{}.display.contact_damping_nms};
   // As the derivations before the contact's design ran: both loops on one reference path, the firmware's damping.
@@ -416,8 +419,7 @@ TEST_CASE("the design's dampings within the timing budget, by the documented met
   constexpr double kCutoffHz = 6.25;
   const double needed_ms = budget_delay_margin_ms();
   for (const auto& chain : chains) {
-    std::optional<Candidate> pick;
-    double best_jnd = 0.0;
+    test::LeastJndPick pick;
     for (const auto& candidate : chain.held) {
       double smallest_ms = std::numeric_limits<double>::infinity();
       std::printf("contact budget: %s, damping %.2f:", chain.name, candidate.damping_nms);
@@ -435,16 +437,11 @@ TEST_CASE("the design's dampings within the timing budget, by the documented met
       }
       const bool kept = smallest_ms >= needed_ms;
       std::printf("  -> %s (needs %.2f ms)\n", kept ? "keeps the budget" : "short of the budget", needed_ms);
-      if (!kept) continue;
-      // Ascending grid: a later damping within 0.01 points of the best takes it (the tie goes to the larger).
-      if (!pick || candidate.jnd_percent <= best_jnd + 0.01) {
-        if (!pick || candidate.jnd_percent < best_jnd) best_jnd = candidate.jnd_percent;
-        pick = candidate;
-      }
+      if (kept) pick.offer(candidate.damping_nms, candidate.jnd_percent);
     }
-    if (pick)
+    if (pick.damping_nms)
       std::printf("contact budget: %s, pick %.2f N m s/rad (force_jnd_violation %.2f %%)\n", chain.name,
-                  pick->damping_nms, pick->jnd_percent);
+                  *pick.damping_nms, pick.jnd_percent);
     else
       std::printf("contact budget: %s has no damping that held and keeps the budget\n", chain.name);
   }
